@@ -1,0 +1,53 @@
+// OpenCL context and in-order queue on one device, and program building from kernels/.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "gpu/cl.hpp"
+#include "gpu/error.hpp"
+
+namespace scatter::gpu {
+
+struct ClDeviceInfo {
+  int platform = 0;
+  int device = 0;
+  std::string platform_name;
+  std::string name;
+  std::string version;
+  std::string type;  // "gpu", "cpu", "accelerator", "other"
+  uint64_t global_memory = 0;
+  uint64_t max_alloc = 0;
+  int compute_units = 0;
+  bool fp64 = false;
+};
+
+// Every OpenCL device of every platform; empty when no ICD or platform is installed.
+std::vector<ClDeviceInfo> list_cl_devices();
+
+class ClContext {
+ public:
+  // `selector`: "" picks the first GPU, else the first device; "P:D" picks platform P, device D;
+  // anything else picks the first device whose name contains it. Throws GpuError when none fits.
+  explicit ClContext(const std::string& selector = "");
+
+  // Builds (once per path and options) the kernel file at `path` ("kernels/common/grid.cl").
+  // Throws GpuError with the compiler's build log when the build fails.
+  cl::Program& program(const std::string& path, const std::string& options = "");
+
+  cl::Context& context() { return context_; }
+  cl::CommandQueue& queue() { return queue_; }
+  const cl::Device& device() const { return device_; }
+  const ClDeviceInfo& info() const { return info_; }
+
+ private:
+  ClDeviceInfo info_;
+  cl::Device device_;
+  cl::Context context_;
+  cl::CommandQueue queue_;
+  std::map<std::string, cl::Program> programs_;
+};
+
+}  // namespace scatter::gpu

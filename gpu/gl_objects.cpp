@@ -1,0 +1,82 @@
+#include "gpu/gl_objects.hpp"
+
+#include "gpu/embedded_sources.hpp"
+#include "gpu/error.hpp"
+
+namespace scatter::gpu {
+
+GlObject GlObject::create(GlKind kind, GLenum shader_type) {
+  GLuint n = 0;
+  switch (kind) {
+    case GlKind::Buffer: glCreateBuffers(1, &n); break;
+    case GlKind::Texture: glGenTextures(1, &n); break;
+    case GlKind::Framebuffer: glCreateFramebuffers(1, &n); break;
+    case GlKind::VertexArray: glCreateVertexArrays(1, &n); break;
+    case GlKind::Program: n = glCreateProgram(); break;
+    case GlKind::Shader: n = glCreateShader(shader_type); break;
+  }
+  if (n == 0) throw GpuError("cannot create an OpenGL object (is a context current?)");
+  return GlObject(kind, n);
+}
+
+void GlObject::reset() {
+  if (name_ == 0) return;
+  switch (kind_) {
+    case GlKind::Buffer: glDeleteBuffers(1, &name_); break;
+    case GlKind::Texture: glDeleteTextures(1, &name_); break;
+    case GlKind::Framebuffer: glDeleteFramebuffers(1, &name_); break;
+    case GlKind::VertexArray: glDeleteVertexArrays(1, &name_); break;
+    case GlKind::Program: glDeleteProgram(name_); break;
+    case GlKind::Shader: glDeleteShader(name_); break;
+  }
+  name_ = 0;
+}
+
+void check_gl(const char* what) {
+  GLenum e = glGetError();
+  if (e != GL_NO_ERROR) throw GpuError(std::string("OpenGL error 0x") + std::to_string(e) + " in " + what);
+}
+
+namespace {
+
+GlObject compile(GLenum type, const std::string& path) {
+  GlObject shader = GlObject::create(GlKind::Shader, type);
+  std::string_view src = embedded_source(path);
+  const char* text = src.data();
+  auto len = static_cast<GLint>(src.size());
+  glShaderSource(shader.get(), 1, &text, &len);
+  glCompileShader(shader.get());
+  GLint ok = 0;
+  glGetShaderiv(shader.get(), GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    GLint n = 0;
+    glGetShaderiv(shader.get(), GL_INFO_LOG_LENGTH, &n);
+    std::string log(static_cast<size_t>(std::max(n, 1)), '\0');
+    glGetShaderInfoLog(shader.get(), n, nullptr, log.data());
+    throw GpuError("GLSL compile of " + path + " failed:\n" + log);
+  }
+  return shader;
+}
+
+}  // namespace
+
+GlObject build_program(const std::string& vertex_path, const std::string& fragment_path) {
+  GlObject vs = compile(GL_VERTEX_SHADER, vertex_path);
+  GlObject fs = compile(GL_FRAGMENT_SHADER, fragment_path);
+  GlObject program = GlObject::create(GlKind::Program);
+  glAttachShader(program.get(), vs.get());
+  glAttachShader(program.get(), fs.get());
+  glLinkProgram(program.get());
+  GLint ok = 0;
+  glGetProgramiv(program.get(), GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint n = 0;
+    glGetProgramiv(program.get(), GL_INFO_LOG_LENGTH, &n);
+    std::string log(static_cast<size_t>(std::max(n, 1)), '\0');
+    glGetProgramInfoLog(program.get(), n, nullptr, log.data());
+    throw GpuError("GLSL link of " + vertex_path + " + " + fragment_path + " failed:\n" + log);
+  }
+  return program;
+}
+
+}  // namespace scatter::gpu

@@ -1,0 +1,35 @@
+// The GPU contexts a render thread owns, created on first use so that a pipeline that needs only
+// OpenGL runs on a machine without OpenCL and the other way round.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "gpu/cl_context.hpp"
+#include "gpu/gl_context.hpp"
+
+namespace scatter::gpu {
+
+struct GpuOptions {
+  std::string cl_device;  // ClContext selector; "" = first GPU, else first device
+};
+
+class Gpu {
+ public:
+  explicit Gpu(GpuOptions options = {}) : options_(std::move(options)) {}
+  ClContext& cl() {
+    if (!cl_) cl_ = std::make_unique<ClContext>(options_.cl_device);
+    return *cl_;
+  }
+  GlContext& gl() {
+    if (!gl_) gl_ = std::make_unique<GlContext>();
+    return *gl_;
+  }
+
+ private:
+  GpuOptions options_;
+  std::unique_ptr<ClContext> cl_;
+  std::unique_ptr<GlContext> gl_;
+};
+
+}  // namespace scatter::gpu

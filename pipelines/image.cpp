@@ -1,0 +1,93 @@
+#include "pipelines/image.hpp"
+
+#include <png.h>
+
+#include <OpenImageIO/imageio.h>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+namespace scatter {
+namespace {
+
+unsigned char encode_srgb(double v) {
+  v = std::clamp(v, 0.0, 1.0);
+  double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+  return static_cast<unsigned char>(std::lround(s * 255));
+}
+
+void write_png(const Image& image, const std::filesystem::path& path, const ToneMap& tone) {
+  std::vector<unsigned char> bytes = to_srgb8(image, tone);
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
+  if (!file) throw std::runtime_error("cannot write " + path.string());
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!info) {
+    png_destroy_write_struct(&png, nullptr);
+    throw std::runtime_error("libpng cannot start writing " + path.string());
+  }
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    throw std::runtime_error("libpng failed writing " + path.string());
+  }
+  png_init_io(png, file.get());
+  png_set_IHDR(png, info, image.width, image.height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+  png_write_info(png, info);
+  for (int y = 0; y < image.height; ++y)
+    png_write_row(png, &bytes[size_t(y) * image.width * 3]);
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+}
+
+void write_oiio(const Image& image, const std::filesystem::path& path, bool linear,
+                const ToneMap& tone) {
+  auto out = OIIO::ImageOutput::create(path.string());
+  if (!out) throw std::runtime_error("cannot write " + path.string() + ": " + OIIO::geterror());
+  OIIO::ImageSpec spec(image.width, image.height, 3, linear ? OIIO::TypeDesc::FLOAT
+                                                            : OIIO::TypeDesc::UINT8);
+  bool ok = out->open(path.string(), spec);
+  if (ok && linear) {
+    ok = out->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data());
+  } else if (ok) {
+    std::vector<unsigned char> bytes = to_srgb8(image, tone);
+    ok = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+  }
+  if (!ok || !out->close()) throw std::runtime_error("cannot write " + path.string() + ": " + out->geterror());
+}
+
+}  // namespace
+
+std::vector<unsigned char> to_srgb8(const Image& image, const ToneMap& tone) {
+  std::vector<unsigned char> bytes(image.rgb.size());
+  for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = encode_srgb(image.rgb[i] * tone.exposure);
+  return bytes;
+}
+
+void write_image(const Image& image, const std::filesystem::path& path, const ToneMap& tone) {
+  std::string ext = path.extension().string();
+  for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".png") return write_png(image, path, tone);
+  if (ext == ".exr") return write_oiio(image, path, true, tone);
+  if (ext == ".jpg" || ext == ".jpeg") return write_oiio(image, path, false, tone);
+  throw std::runtime_error("cannot write " + path.string() +
+                           ": unknown image type (use .exr, .png or .jpg)");
+}
+
+Image read_image(const std::filesystem::path& path) {
+  auto in = OIIO::ImageInput::open(path.string());
+  if (!in) throw std::runtime_error("cannot read " + path.string() + ": " + OIIO::geterror());
+  const OIIO::ImageSpec& spec = in->spec();
+  if (spec.nchannels < 3) throw std::runtime_error(path.string() + " has fewer than 3 channels");
+  Image image(spec.width, spec.height);
+  std::vector<float> all(size_t(spec.width) * spec.height * spec.nchannels);
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
+    throw std::runtime_error("cannot read " + path.string() + ": " + in->geterror());
+  for (size_t p = 0; p < size_t(spec.width) * spec.height; ++p)
+    for (int c = 0; c < 3; ++c) image.rgb[3 * p + c] = all[p * spec.nchannels + c];
+  return image;
+}
+
+}  // namespace scatter

@@ -1,0 +1,36 @@
+// Linear float RGB images, and writing them: EXR keeps linear radiance (OpenImageIO); PNG and JPEG
+// hold tone-mapped sRGB (libpng, OpenImageIO).
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "scene/vec.hpp"
+
+namespace scatter {
+
+struct Image {
+  int width = 0, height = 0;
+  std::vector<float> rgb;  // 3 floats per pixel, row 0 at the top
+
+  Image() = default;
+  Image(int w, int h) : width(w), height(h), rgb(size_t(w) * h * 3, 0.f) {}
+  Vec3 at(int x, int y) const {
+    const float* p = &rgb[(size_t(y) * width + x) * 3];
+    return {p[0], p[1], p[2]};
+  }
+};
+
+struct ToneMap {
+  double exposure = 1.0;  // radiance is multiplied by this, clamped to [0, 1], then sRGB encoded
+};
+
+// Encodes linear radiance as 8-bit sRGB, 3 bytes per pixel.
+std::vector<unsigned char> to_srgb8(const Image& image, const ToneMap& tone = {});
+// Writes by extension: .exr (linear float), .png (libpng), .jpg/.jpeg (OpenImageIO).
+// Throws std::runtime_error naming the file on failure or an unknown extension.
+void write_image(const Image& image, const std::filesystem::path& path, const ToneMap& tone = {});
+// Reads an EXR (or any format OpenImageIO reads) as linear float RGB.
+Image read_image(const std::filesystem::path& path);
+
+}  // namespace scatter

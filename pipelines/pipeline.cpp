@@ -1,0 +1,52 @@
+#include "pipelines/pipeline.hpp"
+
+#include <algorithm>
+
+#include "pipelines/surface/surface_pipeline.hpp"
+#include "protocol/json_reader.hpp"
+
+namespace scatter {
+
+std::string to_string(Terms t) {
+  switch (t) {
+    case Terms::Surface: return "surface";
+    case Terms::Single: return "single";
+    case Terms::Multiple: return "multiple";
+    case Terms::All: return "all";
+  }
+  return "all";
+}
+
+Terms parse_terms(const std::string& s) {
+  for (Terms t : {Terms::Surface, Terms::Single, Terms::Multiple, Terms::All})
+    if (to_string(t) == s) return t;
+  throw ValidationError("terms", "must be one of surface, single, multiple, all; got \"" + s + "\"");
+}
+
+void to_json(nlohmann::json& j, const StagePlan& s) {
+  j = {{"stage", s.name}, {"run", s.run}, {"reason", s.reason}};
+}
+
+void to_json(nlohmann::json& j, const Plan& p) {
+  j = {{"pipeline", p.pipeline}, {"terms", to_string(p.terms)}, {"stages", p.stages}};
+}
+
+std::vector<std::string> pipeline_names() { return {"surface"}; }
+
+std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu) {
+  if (name == "surface") return std::make_unique<SurfacePipeline>(gpu);
+  std::string list;
+  for (const auto& n : pipeline_names()) list += (list.empty() ? "" : ", ") + n;
+  throw ValidationError("pipeline", "unknown pipeline \"" + name + "\" (known: " + list + ")");
+}
+
+void require_terms(const Pipeline& pipeline, Terms terms) {
+  auto ok = pipeline.supported_terms();
+  if (std::find(ok.begin(), ok.end(), terms) != ok.end()) return;
+  std::string list;
+  for (Terms t : ok) list += (list.empty() ? "" : ", ") + to_string(t);
+  throw ValidationError("terms", "pipeline " + pipeline.name() + " cannot render the " +
+                                     to_string(terms) + " term (it renders: " + list + ")");
+}
+
+}  // namespace scatter

@@ -1,0 +1,80 @@
+// The interface every rendering pipeline implements, and the factory that makes one by name.
+//
+//   plan(scene, request)   which stages this scene and request need, and why others are skipped
+//   bake(scene)            cacheable per-asset products (none for pipelines that need no bake)
+//   render(scene, request) linear float RGB holding the requested light-transport terms,
+//                          with the plan it followed and milliseconds per stage
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "gpu/gpu.hpp"
+#include "pipelines/image.hpp"
+#include "scene/scene.hpp"
+
+namespace scatter {
+
+// Which light-transport terms an image holds.
+enum class Terms { Surface, Single, Multiple, All };
+std::string to_string(Terms t);
+// Throws ValidationError for anything but surface, single, multiple, all.
+Terms parse_terms(const std::string& s);
+
+struct StagePlan {
+  std::string name;
+  bool run = true;
+  std::string reason;  // why it runs or why it is skipped
+};
+
+struct Plan {
+  std::string pipeline;
+  Terms terms = Terms::All;
+  std::vector<StagePlan> stages;
+};
+
+struct StageTime {
+  std::string stage;
+  double ms = 0;
+};
+
+struct RenderRequest {
+  Terms terms = Terms::All;
+};
+
+struct RenderResult {
+  Image image;
+  Plan plan;
+  std::vector<StageTime> timings;
+};
+
+struct BakeResult {
+  std::vector<StageTime> timings;  // empty when the pipeline needs no bake
+};
+
+void to_json(nlohmann::json& j, const StagePlan& s);
+void to_json(nlohmann::json& j, const Plan& p);
+
+class Pipeline {
+ public:
+  virtual ~Pipeline() = default;
+  virtual std::string name() const = 0;
+  // The terms this pipeline can render; render() rejects others with a ValidationError.
+  virtual std::vector<Terms> supported_terms() const = 0;
+  virtual Plan plan(const Scene& scene, const RenderRequest& request) = 0;
+  virtual BakeResult bake(const Scene&) { return {}; }
+  virtual RenderResult render(const Scene& scene, const RenderRequest& request) = 0;
+};
+
+// Names the factory knows, in a stable order.
+std::vector<std::string> pipeline_names();
+// Throws ValidationError (field "pipeline") for an unknown name.
+std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu);
+
+// Throws ValidationError unless `pipeline` supports `terms`.
+void require_terms(const Pipeline& pipeline, Terms terms);
+
+}  // namespace scatter

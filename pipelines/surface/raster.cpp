@@ -1,0 +1,105 @@
+#include "pipelines/surface/raster.hpp"
+
+#include <numbers>
+
+#include "gpu/error.hpp"
+
+namespace scatter {
+
+CameraMatrices camera_matrices(const Scene& scene) {
+  const Camera& cam = scene.camera;
+  Aabb b = scene.mesh.bounds();
+  double radius = length(b.size()) / 2;
+  double dist = length(b.center() - cam.position);
+  CameraMatrices m;
+  m.z_far = dist + radius * 1.05 + 1e-3;
+  m.z_near = std::max(m.z_far * 1e-4, (dist - radius * 1.05) * 0.95);
+  m.view = look_at(cam.position, cam.target, cam.up);
+  m.projection = perspective(cam.fov_deg * std::numbers::pi / 180,
+                             double(scene.width) / scene.height, m.z_near, m.z_far);
+  return m;
+}
+
+MeshBuffers::MeshBuffers(const Mesh& mesh) {
+  std::vector<float> interleaved;
+  interleaved.reserve(mesh.positions.size() * 6);
+  for (size_t i = 0; i < mesh.positions.size(); ++i)
+    for (const Vec3* v : {&mesh.positions[i], &mesh.normals[i]})
+      for (int c = 0; c < 3; ++c) interleaved.push_back(static_cast<float>((*v)[c]));
+  vertices_ = gpu::GlObject::create(gpu::GlKind::Buffer);
+  indices_ = gpu::GlObject::create(gpu::GlKind::Buffer);
+  vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
+  glNamedBufferData(vertices_.get(), static_cast<GLsizeiptr>(interleaved.size() * sizeof(float)),
+                    interleaved.data(), GL_STATIC_DRAW);
+  glNamedBufferData(indices_.get(), static_cast<GLsizeiptr>(mesh.indices.size() * sizeof(uint32_t)),
+                    mesh.indices.data(), GL_STATIC_DRAW);
+  glVertexArrayVertexBuffer(vao_.get(), 0, vertices_.get(), 0, 6 * sizeof(float));
+  glVertexArrayElementBuffer(vao_.get(), indices_.get());
+  for (GLuint attr : {0u, 1u}) {
+    glEnableVertexArrayAttrib(vao_.get(), attr);
+    glVertexArrayAttribFormat(vao_.get(), attr, 3, GL_FLOAT, GL_FALSE, attr * 3 * sizeof(float));
+    glVertexArrayAttribBinding(vao_.get(), attr, 0);
+  }
+  count_ = static_cast<GLsizei>(mesh.indices.size());
+  gpu::check_gl("mesh upload");
+}
+
+void MeshBuffers::draw() const {
+  glBindVertexArray(vao_.get());
+  glDrawElements(GL_TRIANGLES, count_, GL_UNSIGNED_INT, nullptr);
+  glBindVertexArray(0);
+}
+
+RenderTarget::RenderTarget(int width, int height) : width_(width), height_(height) {
+  auto texture = [&](GLenum format) {
+    gpu::GlObject t = gpu::GlObject::create(gpu::GlKind::Texture);
+    glBindTexture(GL_TEXTURE_2D, t.get());
+    glTexStorage2D(GL_TEXTURE_2D, 1, format, width, height);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    return t;
+  };
+  color_ = texture(GL_RGBA32F);
+  depth_ = texture(GL_DEPTH_COMPONENT32F);
+  fbo_ = gpu::GlObject::create(gpu::GlKind::Framebuffer);
+  glNamedFramebufferTexture(fbo_.get(), GL_COLOR_ATTACHMENT0, color_.get(), 0);
+  glNamedFramebufferTexture(fbo_.get(), GL_DEPTH_ATTACHMENT, depth_.get(), 0);
+  if (glCheckNamedFramebufferStatus(fbo_.get(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw gpu::GpuError("the float colour + depth framebuffer is incomplete on this driver");
+  gpu::check_gl("render target");
+}
+
+void RenderTarget::bind_and_clear(const Vec3& background) {
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+  glViewport(0, 0, width_, height_);
+  glClearColor(float(background.x), float(background.y), float(background.z), 1.f);
+  glClearDepth(1.0);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+}
+
+Image RenderTarget::read_color() const {
+  std::vector<float> rgba(size_t(width_) * height_ * 4);
+  glGetTextureImage(color_.get(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(rgba.size() * 4),
+                    rgba.data());
+  gpu::check_gl("colour read-back");
+  Image image(width_, height_);
+  for (int y = 0; y < height_; ++y)
+    for (int x = 0; x < width_; ++x)
+      for (int c = 0; c < 3; ++c)  // GL's row 0 is the bottom
+        image.rgb[(size_t(y) * width_ + x) * 3 + c] =
+            rgba[(size_t(height_ - 1 - y) * width_ + x) * 4 + c];
+  return image;
+}
+
+std::vector<float> RenderTarget::read_depth() const {
+  std::vector<float> gl_rows(size_t(width_) * height_), rows(gl_rows.size());
+  glGetTextureImage(depth_.get(), 0, GL_DEPTH_COMPONENT, GL_FLOAT,
+                    static_cast<GLsizei>(gl_rows.size() * 4), gl_rows.data());
+  gpu::check_gl("depth read-back");
+  for (int y = 0; y < height_; ++y)
+    std::copy_n(&gl_rows[size_t(height_ - 1 - y) * width_], width_, &rows[size_t(y) * width_]);
+  return rows;
+}
+
+}  // namespace scatter

@@ -1,0 +1,47 @@
+// Rasterisation pieces shared by the pipelines that draw the mesh: camera matrices, the mesh in GL
+// buffers, and an offscreen float colour + depth target whose depth later passes can read.
+#pragma once
+
+#include "gpu/gl_objects.hpp"
+#include "pipelines/image.hpp"
+#include "scene/scene.hpp"
+
+namespace scatter {
+
+struct CameraMatrices {
+  Mat4 view;
+  Mat4 projection;
+  double z_near = 0.01, z_far = 100;
+};
+
+// Near and far planes hug the mesh's bounding sphere so depth precision goes where the object is.
+CameraMatrices camera_matrices(const Scene& scene);
+
+class MeshBuffers {
+ public:
+  // Uploads positions and normals (attributes 0 and 1) and the indices.
+  explicit MeshBuffers(const Mesh& mesh);
+  void draw() const;
+
+ private:
+  gpu::GlObject vao_, vertices_, indices_;
+  GLsizei count_ = 0;
+};
+
+class RenderTarget {
+ public:
+  // RGBA32F colour and 32-bit float depth textures of the given size.
+  RenderTarget(int width, int height);
+  void bind_and_clear(const Vec3& background);
+  // Colour as linear RGB, row 0 at the top.
+  Image read_color() const;
+  // Window-space depth in [0, 1], row 0 at the top.
+  std::vector<float> read_depth() const;
+  GLuint depth_texture() const { return depth_.get(); }
+
+ private:
+  int width_, height_;
+  gpu::GlObject fbo_, color_, depth_;
+};
+
+}  // namespace scatter

@@ -1,0 +1,23 @@
+// `surface`: the mesh alone, rasterised with energy-normalised Blinn-Phong under the scene's
+// lights through EGL. The smallest end-to-end path; its raster pieces serve later pipelines.
+#pragma once
+
+#include "gpu/gl_objects.hpp"
+#include "pipelines/pipeline.hpp"
+
+namespace scatter {
+
+class SurfacePipeline : public Pipeline {
+ public:
+  explicit SurfacePipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
+  std::string name() const override { return "surface"; }
+  std::vector<Terms> supported_terms() const override { return {Terms::Surface}; }
+  Plan plan(const Scene& scene, const RenderRequest& request) override;
+  RenderResult render(const Scene& scene, const RenderRequest& request) override;
+
+ private:
+  gpu::Gpu& gpu_;
+  gpu::GlObject program_;
+};
+
+}  // namespace scatter

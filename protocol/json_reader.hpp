@@ -1,0 +1,75 @@
+// Reads untrusted JSON objects field by field. Every problem becomes a ValidationError that names
+// the field by its full path ("scene.medium.sigma_s[1]") and says what is wrong with it; fields
+// that nobody read are rejected by finish(), so a misspelt key is an error, not a silent default.
+#pragma once
+
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "scene/vec.hpp"
+
+namespace scatter {
+
+class ValidationError : public std::runtime_error {
+ public:
+  ValidationError(std::string field, const std::string& problem)
+      : std::runtime_error(field.empty() ? problem : field + ": " + problem),
+        field_(std::move(field)) {}
+  const std::string& field() const { return field_; }
+
+ private:
+  std::string field_;
+};
+
+struct Range {
+  double lo;
+  double hi;
+};
+
+class JsonObject {
+ public:
+  // Throws ValidationError unless `value` is an object.
+  JsonObject(const nlohmann::json& value, std::string path);
+
+  bool has(std::string_view key) const;
+  std::string path(std::string_view key) const;
+
+  double number(std::string_view key, std::optional<double> fallback, Range range);
+  int integer(std::string_view key, std::optional<int> fallback, Range range);
+  bool boolean(std::string_view key, std::optional<bool> fallback);
+  std::string string(std::string_view key, std::optional<std::string> fallback);
+  // One of `choices`; the error lists them.
+  std::string choice(std::string_view key, const std::vector<std::string>& choices,
+                     std::optional<std::string> fallback);
+  // A 3-array of numbers, each in `range`.
+  Vec3 vec3(std::string_view key, std::optional<Vec3> fallback, Range range);
+  // Like vec3, but a single number stands for all three channels.
+  Vec3 rgb(std::string_view key, std::optional<Vec3> fallback, Range range);
+  // Array of numbers with a length in [min_len, max_len].
+  std::vector<double> numbers(std::string_view key, size_t min_len, size_t max_len, Range range);
+  JsonObject object(std::string_view key);
+  std::optional<JsonObject> optional_object(std::string_view key);
+  // Raw access for arrays of objects; the caller reads each element with its own JsonObject.
+  const nlohmann::json& array(std::string_view key, size_t min_len, size_t max_len);
+
+  // Throws for the first key that was never read.
+  void finish() const;
+
+ private:
+  const nlohmann::json* find(std::string_view key, bool required);
+
+  const nlohmann::json& value_;
+  std::string path_;
+  std::set<std::string, std::less<>> used_;
+};
+
+// Parses text without throwing on malformed input; reports the parser's position on failure.
+nlohmann::json parse_json(std::string_view text, const std::string& what);
+
+}  // namespace scatter

@@ -1,0 +1,50 @@
+// Triangle meshes: the boundary of a translucent object. Loaded through assimp or tessellated from
+// a procedural shape; checked for watertightness before anything is voxelized from them.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "scene/vec.hpp"
+
+namespace scatter {
+
+struct Mesh {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> normals;  // one per position, unit length
+  std::vector<uint32_t> indices;  // three per triangle, counter-clockwise seen from outside
+
+  size_t triangle_count() const { return indices.size() / 3; }
+  Aabb bounds() const;
+  // Signed volume by the divergence theorem; positive when triangles face outwards.
+  double volume() const;
+  // Smooth vertex normals from the triangles (area weighted).
+  void compute_normals();
+  void transform(double scale, const Vec3& translate);
+};
+
+struct WatertightReport {
+  size_t boundary_edges = 0;     // edges used by one triangle only (holes)
+  size_t nonmanifold_edges = 0;  // edges used by more than two triangles
+  size_t misoriented_edges = 0;  // edges whose two triangles traverse them the same way
+  size_t degenerate_triangles = 0;
+  bool watertight() const {
+    return boundary_edges == 0 && nonmanifold_edges == 0 && misoriented_edges == 0;
+  }
+  std::string summary() const;
+};
+
+// Welds vertices at identical positions, then counts how each edge is shared.
+WatertightReport check_watertight(const Mesh& mesh);
+
+struct MeshLimits {
+  size_t max_triangles = 5'000'000;
+};
+
+// Imports OBJ, PLY, STL, glTF and the other formats assimp reads; all meshes in the file are
+// merged into one. Throws std::runtime_error naming the file and the importer's message.
+Mesh load_mesh(const std::filesystem::path& path, const MeshLimits& limits = {});
+
+}  // namespace scatter

@@ -1,0 +1,52 @@
+#version 450 core
+// Energy-normalised Blinn-Phong under point, directional and spot lights (no shadows).
+// Radiance = sum over lights of (kd / pi + ks (n + 8) / (8 pi) cos^n(theta_h)) E cos(theta_i),
+// with E = intensity / r^2 for point and spot lights and E = irradiance for directional ones.
+const int MAX_LIGHTS = 16;
+const int POINT = 0;
+const int DIRECTIONAL = 1;
+const int SPOT = 2;
+const float PI = 3.14159265358979;
+
+in vec3 world_position;
+in vec3 world_normal;
+
+uniform int light_count;
+uniform int light_type[MAX_LIGHTS];
+uniform vec3 light_position[MAX_LIGHTS];
+uniform vec3 light_direction[MAX_LIGHTS];  // the way the light travels
+uniform vec3 light_power[MAX_LIGHTS];      // colour times intensity (or irradiance)
+uniform vec2 light_cone[MAX_LIGHTS];       // spot: cos(outer), cos(inner)
+uniform vec3 eye;
+uniform vec3 kd;
+uniform vec3 ks;
+uniform float shininess;
+
+layout(location = 0) out vec4 radiance;
+
+void main() {
+  vec3 n = normalize(world_normal);
+  vec3 v = normalize(eye - world_position);
+  if (dot(n, v) < 0.0) n = -n;  // seen from inside (camera within the mesh)
+  vec3 sum = vec3(0.0);
+  for (int i = 0; i < light_count; ++i) {
+    vec3 l;
+    vec3 e = light_power[i];
+    if (light_type[i] == DIRECTIONAL) {
+      l = -light_direction[i];
+    } else {
+      vec3 d = light_position[i] - world_position;
+      float r2 = max(dot(d, d), 1e-12);
+      l = d * inversesqrt(r2);
+      e /= r2;
+      if (light_type[i] == SPOT)
+        e *= smoothstep(light_cone[i].x, light_cone[i].y, dot(-l, light_direction[i]));
+    }
+    float cos_i = dot(n, l);
+    if (cos_i <= 0.0) continue;
+    vec3 h = normalize(l + v);
+    float spec = (shininess + 8.0) / (8.0 * PI) * pow(max(dot(n, h), 0.0), shininess);
+    sum += (kd / PI + ks * spec) * e * cos_i;
+  }
+  radiance = vec4(sum, 1.0);
+}

@@ -1,0 +1,16 @@
+// The scatterd verbs. Each registers its options on the CLI11 app and returns the handler that
+// runs it; handlers throw on error and main() turns that into one line on stderr.
+#pragma once
+
+#include <functional>
+
+#include <CLI/CLI.hpp>
+
+namespace scatter::tools {
+
+using Handler = std::function<int()>;
+
+Handler add_render_command(CLI::App& app);
+Handler add_devices_command(CLI::App& app);
+
+}  // namespace scatter::tools
