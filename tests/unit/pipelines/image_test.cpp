@@ -1,0 +1,54 @@
+#include "pipelines/image.hpp"
+
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include "../test_util.hpp"
+
+namespace scatter {
+namespace {
+
+Image ramp() {
+  Image im(5, 3);
+  for (size_t i = 0; i < im.rgb.size(); ++i) im.rgb[i] = 0.1f * float(i) + 1e-3f;
+  return im;
+}
+
+TEST(ImageIo, ExrKeepsLinearFloatsExactly) {
+  auto dir = test::scratch_dir("image_exr");
+  Image a = ramp();
+  a.rgb[4] = 1234.5f;  // beyond display range
+  write_image(a, dir / "a.exr");
+  Image b = read_image(dir / "a.exr");
+  EXPECT_EQ(b.width, 5);
+  EXPECT_EQ(b.height, 3);
+  EXPECT_EQ(a.rgb, b.rgb);
+}
+
+TEST(ImageIo, PngHoldsToneMappedSrgb) {
+  auto dir = test::scratch_dir("image_png");
+  Image a(2, 1);
+  a.rgb = {0.5f, 0.0f, 1.0f, 2.0f, 0.0031308f, 0.25f};
+  write_image(a, dir / "a.png", ToneMap{1.0});
+  auto in = OIIO::ImageInput::open((dir / "a.png").string());
+  ASSERT_TRUE(in);
+  std::vector<unsigned char> px(6);
+  ASSERT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, px.data()));
+  // sRGB(0.5) = 0.7354 -> 188; 1 and above clamp to 255; 0.0031308 -> 0.04045 -> 10; 0.25 -> 137.
+  EXPECT_EQ(px, (std::vector<unsigned char>{188, 0, 255, 255, 10, 137}));
+  write_image(a, dir / "b.png", ToneMap{0.5});
+  EXPECT_EQ(to_srgb8(a, ToneMap{0.5})[3], 255);  // 2.0 * 0.5 = 1
+  EXPECT_EQ(to_srgb8(a, ToneMap{0.5})[0], 137);  // 0.25
+}
+
+TEST(ImageIo, UnknownExtensionAndUnwritablePathsAreErrors) {
+  auto dir = test::scratch_dir("image_errors");
+  EXPECT_THROW(write_image(ramp(), dir / "a.bmpx"), std::runtime_error);
+  EXPECT_THROW(write_image(ramp(), dir / "no" / "such" / "dir.png"), std::runtime_error);
+  write_image(ramp(), dir / "a.jpg");
+  EXPECT_TRUE(std::filesystem::file_size(dir / "a.jpg") > 0);
+}
+
+}  // namespace
+}  // namespace scatter

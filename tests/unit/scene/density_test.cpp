@@ -1,0 +1,74 @@
+#include "scene/density.hpp"
+
+#include <gtest/gtest.h>
+
+#include "../test_util.hpp"
+
+namespace scatter {
+namespace {
+
+std::shared_ptr<const DensityField> make(const nlohmann::json& j, const std::filesystem::path& dir = ".") {
+  JsonObject o(j, "density");
+  auto f = parse_density(o, dir);
+  o.finish();
+  return f;
+}
+
+TEST(Density, LayersAlternateAlongTheAxis) {
+  auto f = make({{"type", "layers"}, {"axis", {0, 2, 0}}, {"thickness", 0.5}, {"values", {1, 3}}});
+  EXPECT_EQ(f->density({0, 0.1, 0}), 1);
+  EXPECT_EQ(f->density({5, 0.6, -2}), 3);
+  EXPECT_EQ(f->density({0, -0.1, 0}), 3);
+  EXPECT_EQ(f->density({0, 1.1, 0}), 1);
+  EXPECT_FALSE(f->homogeneous());
+}
+
+TEST(Density, NoiseStaysInRangeAndRepeatsForASeed) {
+  for (bool marble : {false, true}) {
+    auto f = make({{"type", "noise"}, {"min", 0.2}, {"max", 0.9}, {"marble", marble}, {"seed", 3}});
+    auto g = make({{"type", "noise"}, {"min", 0.2}, {"max", 0.9}, {"marble", marble}, {"seed", 3}});
+    double lo = 1e9, hi = -1e9;
+    for (int i = 0; i < 2000; ++i) {
+      Vec3 p{std::sin(i * 1.3) * 2, std::cos(i * 0.7) * 2, (i % 17) * 0.1 - 0.8};
+      double d = f->density(p);
+      EXPECT_EQ(d, g->density(p));
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+    EXPECT_GE(lo, 0.2);
+    EXPECT_LE(hi, 0.9);
+    EXPECT_GT(hi - lo, 0.3) << "the noise should vary";
+  }
+}
+
+TEST(Density, GridFileIsInterpolatedAndValidated) {
+  auto dir = test::scratch_dir("density_grid");
+  // 2x1x1 grid over [0,2]x[0,1]x[0,1]: values 1 and 3 at voxel centres x = 0.5 and 1.5.
+  float data[2] = {1.f, 3.f};
+  test::write_file(dir / "g.raw", std::string(reinterpret_cast<char*>(data), sizeof data));
+  test::write_file(dir / "g.json", R"({"dims": [2, 1, 1], "data": "g.raw", "format": "float32",
+                                       "bounds": {"min": [0, 0, 0], "max": [2, 1, 1]}})");
+  auto f = make({{"type", "grid"}, {"file", "g.json"}}, dir);
+  EXPECT_NEAR(f->density({1.0, 0.5, 0.5}), 2.0, 1e-9);
+  EXPECT_NEAR(f->density({0.5, 0.2, 0.9}), 1.0, 1e-9);
+  EXPECT_NEAR(f->density({1.75, 0.5, 0.5}), 3.0, 1e-9);
+  EXPECT_EQ(f->density({2.5, 0.5, 0.5}), 0.0);
+
+  test::write_file(dir / "short.json", R"({"dims": [4, 1, 1], "data": "g.raw",
+                                           "bounds": {"min": [0, 0, 0], "max": [2, 1, 1]}})");
+  try {
+    make({{"type", "grid"}, {"file", "short.json"}}, dir);
+    FAIL();
+  } catch (const ValidationError& e) {
+    EXPECT_NE(std::string(e.what()).find("must hold 16 bytes"), std::string::npos) << e.what();
+  }
+  test::write_file(dir / "huge.json", R"({"dims": [4096, 1, 1], "data": "g.raw",
+                                          "bounds": {"min": [0, 0, 0], "max": [2, 1, 1]}})");
+  EXPECT_THROW(make({{"type", "grid"}, {"file", "huge.json"}}, dir), ValidationError);
+  float bad[2] = {1.f, -1.f};
+  test::write_file(dir / "g.raw", std::string(reinterpret_cast<char*>(bad), sizeof bad));
+  EXPECT_THROW(make({{"type", "grid"}, {"file", "g.json"}}, dir), ValidationError);
+}
+
+}  // namespace
+}  // namespace scatter
