@@ -24,22 +24,26 @@ class StageClock {
 };
 
 void set_light_uniforms(GLuint program, const std::vector<Light>& lights) {
-  auto loc = [&](const std::string& name) { return glGetUniformLocation(program, name.c_str()); };
-  glProgramUniform1i(program, loc("light_count"), static_cast<GLint>(lights.size()));
+  glProgramUniform1i(program, glGetUniformLocation(program, "light_count"),
+                     static_cast<GLint>(lights.size()));
   for (size_t i = 0; i < lights.size(); ++i) {
     const Light& l = lights[i];
-    std::string at = "[" + std::to_string(i) + "]";
+    auto loc = [&](const char* array) {
+      std::string name = array;
+      name.append("[").append(std::to_string(i)).append("]");
+      return glGetUniformLocation(program, name.c_str());
+    };
     int type = l.type == Light::Type::Point ? 0 : (l.type == Light::Type::Directional ? 1 : 2);
     Vec3 power = l.color * l.intensity;
     double to_rad = std::numbers::pi / 180;
-    glProgramUniform1i(program, loc("light_type" + at), type);
-    glProgramUniform3f(program, loc("light_position" + at), float(l.position.x),
+    glProgramUniform1i(program, loc("light_type"), type);
+    glProgramUniform3f(program, loc("light_position"), float(l.position.x),
                        float(l.position.y), float(l.position.z));
-    glProgramUniform3f(program, loc("light_direction" + at), float(l.direction.x),
+    glProgramUniform3f(program, loc("light_direction"), float(l.direction.x),
                        float(l.direction.y), float(l.direction.z));
-    glProgramUniform3f(program, loc("light_power" + at), float(power.x), float(power.y),
+    glProgramUniform3f(program, loc("light_power"), float(power.x), float(power.y),
                        float(power.z));
-    glProgramUniform2f(program, loc("light_cone" + at), float(std::cos(l.outer_deg * to_rad)),
+    glProgramUniform2f(program, loc("light_cone"), float(std::cos(l.outer_deg * to_rad)),
                        float(std::cos(l.inner_deg * to_rad)));
   }
 }
