@@ -115,7 +115,7 @@ TEST_P(MeshImport, CubeImportsWatertightWithUnitVolume) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Formats, MeshImport, ::testing::Values("obj", "ply", "stl", "gltf"),
-                         ::testing::PrintToStringParamName());
+                         [](const ::testing::TestParamInfo<std::string>& p) { return p.param; });
 
 TEST(Mesh, WatertightCheckFindsHolesAndFlippedFaces) {
   Mesh m;
