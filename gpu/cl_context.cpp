@@ -97,10 +97,14 @@ ClContext::ClContext(const std::string& selector) {
   }
 }
 
-cl::Program& ClContext::program(const std::string& path, const std::string& options) {
-  std::string key = path + "\n" + options;
+cl::Program& ClContext::program(const std::vector<std::string>& paths, const std::string& options) {
+  std::string key = options, source, path;
+  for (const auto& p : paths) {
+    key += "\n" + p;
+    path += (path.empty() ? "" : " + ") + p;
+  }
   if (auto it = programs_.find(key); it != programs_.end()) return it->second;
-  std::string source(embedded_source(path));
+  for (const auto& p : paths) source.append(embedded_source(p)).append("\n");
   cl::Program program(context_, source);
   try {
     program.build({device_}, (options + " -cl-std=CL1.2").c_str());

@@ -33,9 +33,10 @@ class ClContext {
   // anything else picks the first device whose name contains it. Throws GpuError when none fits.
   explicit ClContext(const std::string& selector = "");
 
-  // Builds (once per path and options) the kernel file at `path` ("kernels/common/grid.cl").
-  // Throws GpuError with the compiler's build log when the build fails.
-  cl::Program& program(const std::string& path, const std::string& options = "");
+  // Builds (once per file list and options) the kernel files, concatenated in order
+  // ({"kernels/reference/common.cl", "kernels/reference/path.cl"}). Throws GpuError with the
+  // compiler's build log when the build fails.
+  cl::Program& program(const std::vector<std::string>& paths, const std::string& options = "");
 
   cl::Context& context() { return context_; }
   cl::CommandQueue& queue() { return queue_; }
@@ -49,5 +50,12 @@ class ClContext {
   cl::CommandQueue queue_;
   std::map<std::string, cl::Program> programs_;
 };
+
+// Sets every argument of `kernel` in order.
+template <class... Args>
+void set_args(cl::Kernel& kernel, const Args&... args) {
+  cl_uint i = 0;
+  (kernel.setArg(i++, args), ...);
+}
 
 }  // namespace scatter::gpu

@@ -17,17 +17,8 @@ BrickGrid brick_majorants(ClContext& cl, const VoxelGrid& grid, int brick) {
   cl::Buffer sa(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, grid.sigma_a.size() * sizeof(float),
                 const_cast<float*>(grid.sigma_a.data()));
   cl::Buffer maj(ctx, CL_MEM_WRITE_ONLY, bricks * sizeof(float));
-  cl::Kernel kernel(cl.program("kernels/common/grid.cl"), "brick_majorant");
-  kernel.setArg(0, ss);
-  kernel.setArg(1, sa);
-  kernel.setArg(2, grid.nx);
-  kernel.setArg(3, grid.ny);
-  kernel.setArg(4, grid.nz);
-  kernel.setArg(5, brick);
-  kernel.setArg(6, out.bx);
-  kernel.setArg(7, out.by);
-  kernel.setArg(8, out.bz);
-  kernel.setArg(9, maj);
+  cl::Kernel kernel(cl.program({"kernels/common/grid.cl"}), "brick_majorant");
+  set_args(kernel, ss, sa, grid.nx, grid.ny, grid.nz, brick, out.bx, out.by, out.bz, maj);
   cl.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(bricks));
   cl.queue().enqueueReadBuffer(maj, CL_TRUE, 0, bricks * sizeof(float), out.majorant.data());
   return out;

@@ -1,7 +1,10 @@
 #include "pipelines/pipeline.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <sstream>
 
+#include "pipelines/reference/reference_pipeline.hpp"
 #include "pipelines/surface/surface_pipeline.hpp"
 #include "protocol/json_reader.hpp"
 
@@ -31,10 +34,36 @@ void to_json(nlohmann::json& j, const Plan& p) {
   j = {{"pipeline", p.pipeline}, {"terms", to_string(p.terms)}, {"stages", p.stages}};
 }
 
-std::vector<std::string> pipeline_names() { return {"surface"}; }
+double SettingsReader::number(const std::string& key, double fallback, double lo, double hi) {
+  used_.insert(key);
+  auto it = settings_.find(key);
+  if (it == settings_.end()) return fallback;
+  if (!(it->second >= lo && it->second <= hi)) {
+    std::ostringstream msg;
+    msg << "must be in [" << lo << ", " << hi << "] for pipeline " << pipeline_ << ", got "
+        << it->second;
+    throw ValidationError("settings." + key, msg.str());
+  }
+  return it->second;
+}
+
+int SettingsReader::integer(const std::string& key, int fallback, int lo, int hi) {
+  double v = number(key, fallback, lo, hi);
+  if (v != std::floor(v)) throw ValidationError("settings." + key, "must be an integer");
+  return static_cast<int>(v);
+}
+
+void SettingsReader::finish() const {
+  for (const auto& [key, value] : settings_)
+    if (!used_.count(key))
+      throw ValidationError("settings." + key, "is not a setting of pipeline " + pipeline_);
+}
+
+std::vector<std::string> pipeline_names() { return {"surface", "reference"}; }
 
 std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu) {
   if (name == "surface") return std::make_unique<SurfacePipeline>(gpu);
+  if (name == "reference") return std::make_unique<ReferencePipeline>(gpu);
   std::string list;
   for (const auto& n : pipeline_names()) list += (list.empty() ? "" : ", ") + n;
   throw ValidationError("pipeline", "unknown pipeline \"" + name + "\" (known: " + list + ")");

@@ -6,7 +6,11 @@
 //                          with the plan it followed and milliseconds per stage
 #pragma once
 
+#include <functional>
+#include <map>
 #include <memory>
+#include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -41,14 +45,37 @@ struct StageTime {
   double ms = 0;
 };
 
+// Numeric knobs a pipeline understands ("spp", "step", ...); each pipeline documents its own and
+// rejects the ones it does not know, so a typo is an error rather than a silent default.
+using Settings = std::map<std::string, double>;
+
 struct RenderRequest {
   Terms terms = Terms::All;
+  Settings settings;
+  // Called now and then with the fraction done, for long renders.
+  std::function<void(double)> progress;
 };
 
 struct RenderResult {
   Image image;
+  std::optional<Image> std_error;  // per-pixel standard error, for Monte Carlo estimates
   Plan plan;
   std::vector<StageTime> timings;
+};
+
+// Reads Settings with defaults and ranges; finish() rejects keys nobody read.
+class SettingsReader {
+ public:
+  SettingsReader(const Settings& settings, std::string pipeline)
+      : settings_(settings), pipeline_(std::move(pipeline)) {}
+  double number(const std::string& key, double fallback, double lo, double hi);
+  int integer(const std::string& key, int fallback, int lo, int hi);
+  void finish() const;
+
+ private:
+  const Settings& settings_;
+  std::string pipeline_;
+  std::set<std::string> used_;
 };
 
 struct BakeResult {

@@ -1,4 +1,6 @@
 // scatterd render SCENE.json --pipeline NAME --out FILE [--terms T] [--width W --height H] [--json]
+#include <cmath>
+#include <filesystem>
 #include <iostream>
 
 #include "pipelines/pipeline.hpp"
@@ -16,8 +18,37 @@ struct RenderOptions {
   int width = 0, height = 0;
   double exposure = 1.0;
   std::string device;
+  std::vector<std::string> settings;
   bool json = false;
 };
+
+// "key=value" pairs into pipeline settings; the value must be a number.
+Settings parse_settings(const std::vector<std::string>& pairs) {
+  Settings out;
+  for (const auto& p : pairs) {
+    auto eq = p.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw ValidationError("--set", "expects key=value, got \"" + p + "\"");
+    std::string key = p.substr(0, eq), value = p.substr(eq + 1);
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(value, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != value.size() || !std::isfinite(v))
+      throw ValidationError("--set " + key, "expects a number, got \"" + value + "\"");
+    out[key] = v;
+  }
+  return out;
+}
+
+// "out.exr" -> "out.stderr.exr": where the standard error of a Monte Carlo render goes.
+std::filesystem::path std_error_path(const std::filesystem::path& out) {
+  auto p = out;
+  return p.replace_extension(".stderr" + out.extension().string());
+}
 
 int run_render(const RenderOptions& o) {
   SceneLimits limits;
@@ -35,6 +66,7 @@ int run_render(const RenderOptions& o) {
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
   auto pipeline = make_pipeline(o.pipeline, gpu);
   RenderRequest request;
+  request.settings = parse_settings(o.settings);
   if (!o.terms.empty()) {
     request.terms = parse_terms(o.terms);
   } else {
@@ -43,6 +75,11 @@ int run_render(const RenderOptions& o) {
   }
   RenderResult result = pipeline->render(scene, request);
   write_image(result.image, o.out, ToneMap{o.exposure});
+  std::string std_error_file;
+  if (result.std_error) {
+    std_error_file = std_error_path(o.out).string();
+    write_image(*result.std_error, std_error_file, ToneMap{o.exposure});
+  }
 
   if (o.json) {
     nlohmann::json timings = nlohmann::json::object();
@@ -55,6 +92,7 @@ int run_render(const RenderOptions& o) {
                         {"plan", result.plan},          {"timings_ms", timings},
                         {"total_ms", total},            {"output", o.out},
                         {"width", result.image.width},  {"height", result.image.height}};
+    if (!std_error_file.empty()) j["std_error_output"] = std_error_file;
     std::cout << j.dump() << "\n";
   } else {
     std::cout << "wrote " << o.out << " (" << result.image.width << "x" << result.image.height
@@ -77,6 +115,7 @@ Handler add_render_command(CLI::App& app) {
   cmd->add_option("--exposure", o->exposure, "Multiplier before tone mapping (PNG, JPEG)")
       ->capture_default_str();
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");
+  cmd->add_option("--set", o->settings, "Pipeline setting key=value (repeatable), e.g. spp=256");
   cmd->add_flag("--json", o->json, "Print the plan and per-stage milliseconds as one JSON object");
   return [o] { return run_render(*o); };
 }

@@ -1,27 +1,13 @@
 #include "pipelines/surface/surface_pipeline.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <numbers>
 
+#include "pipelines/stage_clock.hpp"
 #include "pipelines/surface/raster.hpp"
 
 namespace scatter {
 namespace {
-
-// Milliseconds since the last call; glFinish first so GL work is counted where it was issued.
-class StageClock {
- public:
-  void stop(const std::string& stage, std::vector<StageTime>& out) {
-    glFinish();
-    auto now = std::chrono::steady_clock::now();
-    out.push_back({stage, std::chrono::duration<double, std::milli>(now - start_).count()});
-    start_ = now;
-  }
-
- private:
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
-};
 
 void set_light_uniforms(GLuint program, const std::vector<Light>& lights) {
   glProgramUniform1i(program, glGetUniformLocation(program, "light_count"),
@@ -52,6 +38,7 @@ void set_light_uniforms(GLuint program, const std::vector<Light>& lights) {
 
 Plan SurfacePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
+  SettingsReader(request.settings, name()).finish();  // the surface pipeline has no settings
   Plan p{name(), request.terms, {}};
   p.stages.push_back({"upload", true, std::to_string(scene.mesh.triangle_count()) + " triangles"});
   p.stages.push_back({"raster", true,
@@ -66,10 +53,11 @@ RenderResult SurfacePipeline::render(const Scene& scene, const RenderRequest& re
   result.plan = plan(scene, request);
   gpu_.gl().make_current();
   if (!program_) program_ = gpu::build_program("shaders/surface/mesh.vert", "shaders/surface/blinn_phong.frag");
-  StageClock clock;
+  StageClock clock(result.timings);
   MeshBuffers mesh(scene.mesh);
   RenderTarget target(scene.width, scene.height);
-  clock.stop("upload", result.timings);
+  glFinish();
+  clock.stop("upload");
 
   GLuint prog = program_.get();
   CameraMatrices cam = camera_matrices(scene);
@@ -94,11 +82,12 @@ RenderResult SurfacePipeline::render(const Scene& scene, const RenderRequest& re
   mesh.draw();
   glUseProgram(0);
   gpu::check_gl("surface raster");
-  clock.stop("raster", result.timings);
+  glFinish();
+  clock.stop("raster");
 
   result.image = target.read_color();
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  clock.stop("readback", result.timings);
+  clock.stop("readback");
   return result;
 }
 

@@ -32,7 +32,7 @@ TEST(ClContext, BuffersAreReferenceCounted) {
 TEST(ClContext, MissingKernelFileIsAClearError) {
   ClContext& cl = test::shared_gpu().cl();
   try {
-    cl.program("kernels/none.cl");
+    cl.program({"kernels/none.cl"});
     FAIL();
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("kernels/none.cl"), std::string::npos);

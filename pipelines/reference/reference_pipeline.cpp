@@ -1,0 +1,132 @@
+#include "pipelines/reference/reference_pipeline.hpp"
+
+#include <cmath>
+
+#include "pipelines/cl_scene.hpp"
+#include "pipelines/stage_clock.hpp"
+#include "protocol/json_reader.hpp"
+
+namespace scatter {
+namespace {
+
+const std::vector<std::string> kProgram = {"kernels/reference/common.cl"};
+
+std::vector<std::string> program(const char* file) {
+  auto p = kProgram;
+  p.push_back(file);
+  return p;
+}
+
+bool marches(const ReferenceSettings& s, Terms terms) { return terms == Terms::Single && !s.mc; }
+
+// Mean and standard error of the mean from per-sample sums.
+void finish_estimate(const std::vector<float>& sum, const std::vector<float>& sum_sq, double n,
+                     Image& mean, Image& std_error) {
+  for (size_t i = 0; i < sum.size(); ++i) {
+    double m = sum[i] / n;
+    double var = std::max(0.0, sum_sq[i] / n - m * m) * n / std::max(1.0, n - 1);
+    mean.rgb[i] = static_cast<float>(m);
+    std_error.rgb[i] = static_cast<float>(std::sqrt(var / n));
+  }
+}
+
+}  // namespace
+
+ReferenceSettings ReferenceSettings::read(const Settings& settings) {
+  SettingsReader r(settings, "reference");
+  ReferenceSettings s;
+  s.spp = r.integer("spp", s.spp, 1, 1 << 20);
+  s.step = r.number("step", s.step, 1e-3, 4);
+  s.seed = static_cast<uint32_t>(r.integer("seed", 1, 0, 1 << 30));
+  s.max_depth = r.integer("max_depth", s.max_depth, 1, 1 << 20);
+  s.mc = r.integer("mc", 0, 0, 1) == 1;
+  r.finish();
+  return s;
+}
+
+Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
+  require_terms(*this, request.terms);
+  ReferenceSettings s = ReferenceSettings::read(request.settings);
+  if (scene.medium.ior != 1.0)
+    throw ValidationError("scene.medium.ior",
+                          "the reference pipeline renders index-matched media only (ior 1) so far");
+  Plan p{name(), request.terms, {}};
+  p.stages.push_back({"voxelize", true, std::to_string(scene.voxels) + " voxels on the long side"});
+  p.stages.push_back({"upload", true, "medium, per-brick majorants (8^3 voxels), lights, camera"});
+  if (marches(s, request.terms)) {
+    p.stages.push_back({"march", true, "deterministic single scattering, step " +
+                                           std::to_string(s.step) + " voxels"});
+    p.stages.push_back({"trace", false, "the single term is marched, not sampled (mc=1 samples it)"});
+  } else {
+    p.stages.push_back({"march", false, "Monte Carlo estimates this term"});
+    p.stages.push_back({"trace", true, std::to_string(s.spp) + " samples per pixel, " +
+                                           (request.terms == Terms::Single ? "first vertex only"
+                                                                          : "all orders")});
+  }
+  p.stages.push_back({"readback", true, "mean and standard error"});
+  return p;
+}
+
+RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& request) {
+  RenderResult result;
+  result.plan = plan(scene, request);
+  ReferenceSettings s = ReferenceSettings::read(request.settings);
+  StageClock clock(result.timings);
+  VoxelGrid grid = voxelize(scene, {.resolution = scene.voxels});
+  clock.stop("voxelize");
+
+  gpu::ClContext& cl = gpu_.cl();
+  ClMedium medium = upload_medium(cl, grid);
+  cl::Buffer lights = upload(cl, pack_lights(scene.lights));
+  cl::Buffer camera = upload(cl, pack_camera(scene.camera, scene.width, scene.height));
+  const int w = scene.width, h = scene.height;
+  const size_t floats = size_t(w) * h * 3;
+  cl::NDRange global(w, h);
+  auto& queue = cl.queue();
+  queue.finish();
+  clock.stop("upload");
+
+  result.image = Image(w, h);
+  const int light_count = static_cast<int>(scene.lights.size());
+  const float g = static_cast<float>(scene.medium.g);
+  if (marches(s, request.terms)) {
+    cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, floats * sizeof(float));
+    cl::Kernel k(cl.program(program("kernels/reference/single_march.cl")), "single_march");
+    gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz, medium.sigma_s,
+                  medium.sigma_t, lights, light_count, g, camera, w, h, float(s.step), out);
+    queue.enqueueNDRangeKernel(k, cl::NullRange, global);
+    queue.finish();
+    clock.stop("march");
+    queue.enqueueReadBuffer(out, CL_TRUE, 0, floats * sizeof(float), result.image.rgb.data());
+    clock.stop("readback");
+    return result;
+  }
+
+  std::vector<float> zeros(floats, 0.f);
+  cl::Buffer sum(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float), zeros.data());
+  cl::Buffer sum_sq(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float), zeros.data());
+  cl::Kernel k(cl.program(program("kernels/reference/path.cl")), "path_trace");
+  int terms = request.terms == Terms::Single ? 1 : (request.terms == Terms::Multiple ? 2 : 3);
+  // Progressive passes of a few samples keep each launch short and let callers see progress.
+  const int per_pass = std::min(s.spp, 4);
+  for (int done = 0; done < s.spp; done += per_pass) {
+    int n = std::min(per_pass, s.spp - done);
+    gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz,
+                  medium.bricks.brick, medium.bricks.bx, medium.bricks.by, medium.bricks.bz,
+                  medium.sigma_s, medium.sigma_t, medium.majorant, lights, light_count, g, camera,
+                  w, h, terms, n, done, s.seed, s.max_depth, sum, sum_sq);
+    queue.enqueueNDRangeKernel(k, cl::NullRange, global);
+    queue.finish();
+    if (request.progress) request.progress(double(done + n) / s.spp);
+  }
+  clock.stop("trace");
+  std::vector<float> host_sum(floats), host_sq(floats);
+  queue.enqueueReadBuffer(sum, CL_TRUE, 0, floats * sizeof(float), host_sum.data());
+  queue.enqueueReadBuffer(sum_sq, CL_TRUE, 0, floats * sizeof(float), host_sq.data());
+  result.std_error = Image(w, h);
+  finish_estimate(host_sum, host_sq, s.spp, result.image, *result.std_error);
+  clock.stop("readback");
+  return result;
+}
+
+}  // namespace scatter

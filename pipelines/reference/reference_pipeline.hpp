@@ -1,0 +1,39 @@
+// `reference`: ground truth in OpenCL, for the voxelized medium (each voxel holds constant
+// sigma_s, sigma_a; the mesh boundary is index matched).
+//
+//   single term, default    deterministic ray marcher (kernels/reference/single_march.cl)
+//   single term, mc=1       Monte Carlo, NEE at the first vertex only
+//   multiple, all           Monte Carlo path tracer (kernels/reference/path.cl)
+//
+// Settings: spp (64) samples per pixel; step (0.25) marcher sub-step in voxels; seed (1);
+// max_depth (1024) scattering events per path; mc (0) use Monte Carlo for the single term.
+#pragma once
+
+#include "pipelines/pipeline.hpp"
+
+namespace scatter {
+
+struct ReferenceSettings {
+  int spp = 64;
+  double step = 0.25;
+  uint32_t seed = 1;
+  int max_depth = 1024;
+  bool mc = false;
+  static ReferenceSettings read(const Settings& settings);
+};
+
+class ReferencePipeline : public Pipeline {
+ public:
+  explicit ReferencePipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
+  std::string name() const override { return "reference"; }
+  std::vector<Terms> supported_terms() const override {
+    return {Terms::Single, Terms::Multiple, Terms::All};
+  }
+  Plan plan(const Scene& scene, const RenderRequest& request) override;
+  RenderResult render(const Scene& scene, const RenderRequest& request) override;
+
+ private:
+  gpu::Gpu& gpu_;
+};
+
+}  // namespace scatter

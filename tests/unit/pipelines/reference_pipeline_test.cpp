@@ -1,0 +1,149 @@
+#include "pipelines/reference/reference_pipeline.hpp"
+
+#include <gtest/gtest.h>
+
+#include <numbers>
+
+#include "../test_util.hpp"
+#include "protocol/json_reader.hpp"
+
+namespace scatter {
+namespace {
+
+RenderResult render(const Scene& scene, Terms terms, Settings settings = {}) {
+  ReferencePipeline p(test::shared_gpu());
+  return p.render(scene, {terms, std::move(settings)});
+}
+
+Scene small(const std::string& name, int size, int voxels) {
+  Scene s = load_scene(test::source_path("scenes/" + name + ".json"));
+  s.width = s.height = size;
+  s.voxels = voxels;
+  return s;
+}
+
+// Box [-1, 1]^3 lit from +z by a directional light, seen from +z along the axis: on the centre
+// ray the single-scattered radiance is sigma_s p(-1) E (1 - exp(-4 sigma_t)) / (2 sigma_t).
+Scene axis_box(double sigma_s, double sigma_a, double g) {
+  nlohmann::json j = test::minimal_scene();
+  j["mesh"] = {{"shape", "box"}, {"size", {2, 2, 2}}};
+  j["medium"] = {{"sigma_s", sigma_s}, {"sigma_a", sigma_a}, {"g", g}};
+  j["lights"] = {{{"type", "directional"}, {"direction", {0, 0, -1}}, {"irradiance", 2.0}}};
+  j["camera"] = {{"position", {0, 0, 4}}, {"fov_deg", 30}};
+  j["image"] = {{"width", 9}, {"height", 9}};  // odd: the centre pixel's ray is the axis
+  j["voxels"] = 32;                            // voxel faces fall on the box's faces
+  return parse_scene(j, ".");
+}
+
+double axis_box_radiance(double sigma_s, double sigma_a, double g) {
+  double st = sigma_s + sigma_a;
+  double p = (1 - g * g) / (4 * std::numbers::pi * std::pow(1 + g, 3));  // HG at cos = -1
+  return sigma_s * p * 2.0 * (1 - std::exp(-4 * st)) / (2 * st);
+}
+
+TEST(ReferencePipeline, MarcherMatchesClosedFormOnTheAxis) {
+  for (double st : {0.1, 1.0, 5.0}) {
+    Scene s = axis_box(0.8 * st, 0.2 * st, 0.3);
+    double expected = axis_box_radiance(0.8 * st, 0.2 * st, 0.3);
+    Vec3 got = render(s, Terms::Single).image.at(4, 4);
+    // The light's transmittance is taken at each sub-step's midpoint: relative error about
+    // (sigma_t h)^2 / 24 with h = step * voxel = 1/64, i.e. 2.5e-4 at sigma_t = 5.
+    EXPECT_NEAR(got.x, expected, 1e-3 * expected) << "sigma_t " << st;
+    EXPECT_NEAR(got.z, expected, 1e-3 * expected);
+  }
+}
+
+TEST(ReferencePipeline, MonteCarloSingleMatchesClosedFormOnTheAxis) {
+  Scene s = axis_box(0.8, 0.2, 0.3);
+  double expected = axis_box_radiance(0.8, 0.2, 0.3);
+  RenderResult r = render(s, Terms::Single, {{"mc", 1}, {"spp", 6000}});
+  double got = r.image.at(4, 4).x, se = r.std_error->at(4, 4).x;
+  EXPECT_GT(se, 0);
+  EXPECT_LT(se, 0.05 * expected);
+  EXPECT_NEAR(got, expected, 4 * se);
+}
+
+// The deterministic marcher and the Monte Carlo single-scatter estimate agree within the Monte
+// Carlo noise on every shipped scene: per-pixel z-scores have unit variance and no outliers.
+// Only pixels the Monte Carlo resolves (standard error under a quarter of the mean) enter the
+// z-scores: where one or two of the samples hit, the sample variance says little about the error.
+// The sum over all pixels covers the rest.
+TEST(ReferencePipeline, MarcherAndMonteCarloAgreeOnShippedScenes) {
+  for (const char* name : {"sphere", "cube-torus", "layers", "bunny"}) {
+    SCOPED_TRACE(name);
+    Scene s = small(name, 32, 32);
+    Image march = render(s, Terms::Single).image;
+    RenderResult mc = render(s, Terms::Single, {{"mc", 1}, {"spp", 192}, {"seed", 7}});
+    double z2 = 0, diff = 0, var = 0;
+    int n = 0, outliers = 0;
+    for (size_t i = 0; i < march.rgb.size(); ++i) {
+      double se = mc.std_error->rgb[i];
+      diff += mc.image.rgb[i] - march.rgb[i];
+      var += se * se;
+      if (se <= 0 || se > 0.25 * mc.image.rgb[i]) continue;
+      double z = (mc.image.rgb[i] - march.rgb[i]) / se;
+      z2 += z * z;
+      outliers += std::abs(z) > 5;
+      ++n;
+    }
+    ASSERT_GT(n, 300);
+    EXPECT_LT(outliers, n / 200 + 1);
+    EXPECT_LT(z2 / n, 1.5);                     // unit variance, with room for a noisy stderr
+    EXPECT_LT(std::abs(diff), 4 * std::sqrt(var));  // no bias in the sum over the image
+  }
+}
+
+TEST(ReferencePipeline, HalvingTheMarchStepChangesLittle) {
+  for (const char* name : {"sphere", "layers"}) {
+    Scene s = small(name, 48, 48);
+    Image a = render(s, Terms::Single, {{"step", 0.25}}).image;
+    Image b = render(s, Terms::Single, {{"step", 0.125}}).image;
+    double num = 0, den = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) {
+      num += (a.rgb[i] - b.rgb[i]) * (a.rgb[i] - b.rgb[i]);
+      den += b.rgb[i] * b.rgb[i];
+    }
+    EXPECT_LT(std::sqrt(num / den), 1e-3) << name;
+  }
+}
+
+TEST(ReferencePipeline, ExtremeMediaStayFinite) {
+  for (double st : {1e-6, 1e-2, 1.0, 1e2, 1e4})
+    for (double albedo : {0.0, 1.0})
+      for (double g : {-0.99, 0.0, 0.99}) {
+        nlohmann::json j = test::minimal_scene();
+        j["medium"] = {{"sigma_s", albedo * st}, {"sigma_a", (1 - albedo) * st}, {"g", g}};
+        j["lights"].push_back({{"type", "point"}, {"position", {0.5, 2, 1}}, {"intensity", 5}});
+        j["image"] = {{"width", 12}, {"height", 12}};
+        j["voxels"] = 12;
+        Scene s = parse_scene(j, ".");
+        for (Terms t : {Terms::Single, Terms::All}) {
+          RenderResult r = render(s, t, {{"spp", 4}, {"max_depth", 256}});
+          for (float v : r.image.rgb) ASSERT_TRUE(std::isfinite(v) && v >= 0) << st << " " << albedo << " " << g;
+          if (r.std_error) {
+            for (float v : r.std_error->rgb) ASSERT_TRUE(std::isfinite(v));
+          }
+        }
+      }
+}
+
+TEST(ReferencePipeline, RejectsUnknownSettingsAndDielectrics) {
+  Scene s = axis_box(1, 0.1, 0);
+  EXPECT_THROW(render(s, Terms::Single, {{"sppp", 3}}), ValidationError);
+  EXPECT_THROW(render(s, Terms::Single, {{"spp", 0}}), ValidationError);
+  EXPECT_THROW(render(s, Terms::Surface), ValidationError);
+  s.medium.ior = 1.5;
+  EXPECT_THROW(render(s, Terms::All), ValidationError);
+}
+
+TEST(ReferencePipeline, SameSeedRepeats) {
+  Scene s = small("sphere", 16, 16);
+  RenderResult a = render(s, Terms::Multiple, {{"spp", 8}, {"seed", 3}});
+  RenderResult b = render(s, Terms::Multiple, {{"spp", 8}, {"seed", 3}});
+  RenderResult c = render(s, Terms::Multiple, {{"spp", 8}, {"seed", 4}});
+  EXPECT_EQ(a.image.rgb, b.image.rgb);
+  EXPECT_NE(a.image.rgb, c.image.rgb);
+}
+
+}  // namespace
+}  // namespace scatter
