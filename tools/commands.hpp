@@ -12,5 +12,6 @@ using Handler = std::function<int()>;
 
 Handler add_render_command(CLI::App& app);
 Handler add_devices_command(CLI::App& app);
+Handler add_slab_command(CLI::App& app);
 
 }  // namespace scatter::tools

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   };
   add(&scatter::tools::add_render_command);
   add(&scatter::tools::add_devices_command);
+  add(&scatter::tools::add_slab_command);
 
   try {
     app.parse(argc, argv);

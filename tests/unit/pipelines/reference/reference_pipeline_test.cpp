@@ -4,7 +4,7 @@
 
 #include <numbers>
 
-#include "../test_util.hpp"
+#include "../../test_util.hpp"
 #include "protocol/json_reader.hpp"
 
 namespace scatter {

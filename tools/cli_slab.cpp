@@ -1,0 +1,67 @@
+// scatterd slab --tau T|inf --albedo A --g G --mu0 M --ior N --solver reference [--photons K]
+//               [--seed S] [--json]
+#include <cmath>
+#include <iostream>
+
+#include "gpu/gpu.hpp"
+#include "pipelines/reference/slab.hpp"
+#include "protocol/json_reader.hpp"
+#include "tools/commands.hpp"
+
+namespace scatter::tools {
+namespace {
+
+struct SlabOptions {
+  std::string tau = "1";
+  SlabParams params;
+  std::string solver = "reference";
+  std::string device;
+  bool json = false;
+};
+
+int run_slab(SlabOptions o) {
+  if (o.tau == "inf") {
+    o.params.tau = INFINITY;
+  } else {
+    size_t used = 0;
+    try {
+      o.params.tau = std::stod(o.tau, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != o.tau.size())
+      throw ValidationError("--tau", "expects a number or inf, got \"" + o.tau + "\"");
+  }
+  if (o.solver != "reference")
+    throw ValidationError("--solver", "unknown solver \"" + o.solver + "\" (known: reference)");
+  gpu::Gpu gpu(gpu::GpuOptions{o.device});
+  SlabResult r = run_reference_slab(gpu.cl(), o.params);
+  nlohmann::json j = r;
+  if (o.json) {
+    std::cout << j.dump() << "\n";
+  } else {
+    for (const auto& [k, v] : j.items()) std::cout << k << " = " << v << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+Handler add_slab_command(CLI::App& app) {
+  auto o = std::make_shared<SlabOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "slab", "Reflectance and transmittance of a plane-parallel slab lit by a collimated beam");
+  cmd->add_option("--tau", o->tau, "Optical thickness, or inf for a half-space")->capture_default_str();
+  cmd->add_option("--albedo", o->params.albedo, "Single-scattering albedo")->capture_default_str();
+  cmd->add_option("--g", o->params.g, "Henyey-Greenstein asymmetry")->capture_default_str();
+  cmd->add_option("--mu0", o->params.mu0, "Cosine of the incidence angle")->capture_default_str();
+  cmd->add_option("--ior", o->params.ior, "Refractive index of the slab (outside: 1)")->capture_default_str();
+  cmd->add_option("--photons", o->params.photons, "Photons to trace")->capture_default_str();
+  cmd->add_option("--seed", o->params.seed, "Random seed")->capture_default_str();
+  cmd->add_option("--solver", o->solver, "reference")->capture_default_str();
+  cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");
+  cmd->add_flag("--json", o->json, "Print one JSON object");
+  return [o] { return run_slab(*o); };
+}
+
+}  // namespace scatter::tools
