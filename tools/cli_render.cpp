@@ -6,6 +6,7 @@
 #include "pipelines/pipeline.hpp"
 #include "protocol/json_reader.hpp"
 #include "tools/commands.hpp"
+#include "tools/settings_option.hpp"
 
 namespace scatter::tools {
 namespace {
@@ -21,28 +22,6 @@ struct RenderOptions {
   std::vector<std::string> settings;
   bool json = false;
 };
-
-// "key=value" pairs into pipeline settings; the value must be a number.
-Settings parse_settings(const std::vector<std::string>& pairs) {
-  Settings out;
-  for (const auto& p : pairs) {
-    auto eq = p.find('=');
-    if (eq == std::string::npos || eq == 0)
-      throw ValidationError("--set", "expects key=value, got \"" + p + "\"");
-    std::string key = p.substr(0, eq), value = p.substr(eq + 1);
-    size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(value, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != value.size() || !std::isfinite(v))
-      throw ValidationError("--set " + key, "expects a number, got \"" + value + "\"");
-    out[key] = v;
-  }
-  return out;
-}
 
 // "out.exr" -> "out.stderr.exr": where the standard error of a Monte Carlo render goes.
 std::filesystem::path std_error_path(const std::filesystem::path& out) {

@@ -13,5 +13,6 @@ using Handler = std::function<int()>;
 Handler add_render_command(CLI::App& app);
 Handler add_devices_command(CLI::App& app);
 Handler add_slab_command(CLI::App& app);
+Handler add_bench_command(CLI::App& app);
 
 }  // namespace scatter::tools

@@ -1,0 +1,24 @@
+// Image error measures used by tests and benchmarks (DESIGN: relative RMSE over the pixels the
+// medium covers, on linear radiance).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "pipelines/image.hpp"
+#include "scene/scene.hpp"
+#include "scene/voxelizer.hpp"
+
+namespace scatter {
+
+// 1 for pixels whose camera ray (through the pixel centre) crosses a voxel with occupancy > 0.
+std::vector<uint8_t> coverage_mask(const Scene& scene, const VoxelGrid& grid);
+
+// ||a - ref||_2 / ||ref||_2 over the masked pixels, all channels. Throws std::invalid_argument
+// when the sizes differ or the reference is zero there.
+double relative_rmse(const Image& a, const Image& ref, const std::vector<uint8_t>& mask);
+
+// ||e||_2 / ||ref||_2 over the masked pixels: e.g. a Monte Carlo reference's own noise level.
+double relative_norm(const Image& e, const Image& ref, const std::vector<uint8_t>& mask);
+
+}  // namespace scatter
