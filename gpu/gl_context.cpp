@@ -67,19 +67,24 @@ GlContext::GlContext() {
       throw GpuError("the EGL driver cannot create an OpenGL 4.5 core context (" + egl_error() + ")");
     context_ = ctx;
     make_current();
-    renderer_ = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-    version_ = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+    auto text = [](GLenum name) {
+      const GLubyte* s = glGetString(name);
+      return s ? std::string(reinterpret_cast<const char*>(s)) : std::string("unknown");
+    };
+    renderer_ = text(GL_RENDERER);
+    version_ = text(GL_VERSION);
   } catch (...) {
     if (context_) eglDestroyContext(display, context_);
-    eglTerminate(display);
     throw;
   }
 }
 
+// The display is never terminated: EGL hands the same display to every caller in the process, so
+// terminating it would invalidate every other context on it. It is released at exit.
 GlContext::~GlContext() {
-  eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  if (eglGetCurrentContext() == context_)
+    eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(display_, context_);
-  eglTerminate(display_);
 }
 
 void GlContext::make_current() {

@@ -1,5 +1,7 @@
 #include "gpu/gl_objects.hpp"
 
+#include <cstdio>
+
 #include "gpu/embedded_sources.hpp"
 #include "gpu/error.hpp"
 
@@ -34,7 +36,11 @@ void GlObject::reset() {
 
 void check_gl(const char* what) {
   GLenum e = glGetError();
-  if (e != GL_NO_ERROR) throw GpuError(std::string("OpenGL error 0x") + std::to_string(e) + " in " + what);
+  if (e != GL_NO_ERROR) {
+    char code[16];
+    std::snprintf(code, sizeof code, "0x%04x", e);
+    throw GpuError(std::string("OpenGL error ") + code + " in " + what);
+  }
 }
 
 namespace {

@@ -66,14 +66,29 @@ std::vector<unsigned char> to_srgb8(const Image& image, const ToneMap& tone) {
   return bytes;
 }
 
-void write_image(const Image& image, const std::filesystem::path& path, const ToneMap& tone) {
+namespace {
+
+std::string lower_extension(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+}  // namespace
+
+void check_image_path(const std::filesystem::path& path) {
+  std::string ext = lower_extension(path);
+  if (ext != ".png" && ext != ".exr" && ext != ".jpg" && ext != ".jpeg")
+    throw std::runtime_error("cannot write " + path.string() +
+                             ": unknown image type (use .exr, .png or .jpg)");
+}
+
+void write_image(const Image& image, const std::filesystem::path& path, const ToneMap& tone) {
+  check_image_path(path);
+  std::string ext = lower_extension(path);
   if (ext == ".png") return write_png(image, path, tone);
   if (ext == ".exr") return write_oiio(image, path, true, tone);
-  if (ext == ".jpg" || ext == ".jpeg") return write_oiio(image, path, false, tone);
-  throw std::runtime_error("cannot write " + path.string() +
-                           ": unknown image type (use .exr, .png or .jpg)");
+  return write_oiio(image, path, false, tone);
 }
 
 Image read_image(const std::filesystem::path& path) {

@@ -27,6 +27,8 @@ struct ToneMap {
 
 // Encodes linear radiance as 8-bit sRGB, 3 bytes per pixel.
 std::vector<unsigned char> to_srgb8(const Image& image, const ToneMap& tone = {});
+// Throws std::runtime_error unless `path` has an extension write_image() knows.
+void check_image_path(const std::filesystem::path& path);
 // Writes by extension: .exr (linear float), .png (libpng), .jpg/.jpeg (OpenImageIO).
 // Throws std::runtime_error naming the file on failure or an unknown extension.
 void write_image(const Image& image, const std::filesystem::path& path, const ToneMap& tone = {});

@@ -22,7 +22,7 @@ class LayersDensity : public DensityField {
   LayersDensity(Vec3 axis, double thickness, std::vector<double> values)
       : axis_(axis), thickness_(thickness), values_(std::move(values)) {}
   double density(const Vec3& p) const override {
-    auto k = static_cast<long long>(std::floor(dot(p, axis_) / thickness_));
+    auto k = static_cast<long long>(std::clamp(std::floor(dot(p, axis_) / thickness_), -1e15, 1e15));
     auto n = static_cast<long long>(values_.size());
     return values_[static_cast<size_t>(((k % n) + n) % n)];
   }
@@ -165,7 +165,7 @@ double gradient_noise(const Vec3& p, unsigned seed) {
   int i[3];
   double f[3], w[3];
   for (int a = 0; a < 3; ++a) {
-    double fl = std::floor(p[a]);
+    double fl = std::clamp(std::floor(p[a]), -1e9, 1e9);
     i[a] = static_cast<int>(fl);
     f[a] = p[a] - fl;
     w[a] = f[a] * f[a] * f[a] * (f[a] * (f[a] * 6 - 15) + 10);

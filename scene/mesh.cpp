@@ -4,6 +4,7 @@
 #include <assimp/scene.h>
 
 #include <assimp/Importer.hpp>
+#include <cmath>
 #include <map>
 #include <stdexcept>
 #include <unordered_map>
@@ -41,6 +42,11 @@ void Mesh::compute_normals() {
 
 void Mesh::transform(double scale, const Vec3& translate) {
   for (auto& p : positions) p = p * scale + translate;
+}
+
+void Mesh::orient_outwards() {
+  if (volume() < 0)
+    for (size_t t = 0; t + 2 < indices.size(); t += 3) std::swap(indices[t + 1], indices[t + 2]);
 }
 
 std::string WatertightReport::summary() const {
@@ -104,8 +110,14 @@ Mesh load_mesh(const std::filesystem::path& path, const MeshLimits& limits) {
     const aiMesh* am = scene->mMeshes[m];
     if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
     auto base = static_cast<uint32_t>(mesh.positions.size());
-    for (unsigned i = 0; i < am->mNumVertices; ++i)
-      mesh.positions.push_back({am->mVertices[i].x, am->mVertices[i].y, am->mVertices[i].z});
+    for (unsigned i = 0; i < am->mNumVertices; ++i) {
+      Vec3 p{am->mVertices[i].x, am->mVertices[i].y, am->mVertices[i].z};
+      for (int a = 0; a < 3; ++a)
+        if (!std::isfinite(p[a]) || std::abs(p[a]) > 1e6)
+          throw std::runtime_error("mesh " + path.string() + ": vertex " + std::to_string(i) +
+                                   " has a coordinate that is not finite or beyond 1e6");
+      mesh.positions.push_back(p);
+    }
     for (unsigned f = 0; f < am->mNumFaces; ++f) {
       const aiFace& face = am->mFaces[f];
       if (face.mNumIndices != 3) continue;

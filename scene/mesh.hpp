@@ -23,6 +23,8 @@ struct Mesh {
   // Smooth vertex normals from the triangles (area weighted).
   void compute_normals();
   void transform(double scale, const Vec3& translate);
+  // Reverses every triangle's winding if the mesh is inside-out (negative volume).
+  void orient_outwards();
 };
 
 struct WatertightReport {
@@ -44,7 +46,8 @@ struct MeshLimits {
 };
 
 // Imports OBJ, PLY, STL, glTF and the other formats assimp reads; all meshes in the file are
-// merged into one. Throws std::runtime_error naming the file and the importer's message.
+// merged into one. Throws std::runtime_error naming the file and the problem: the importer's
+// message, no triangles, too many, or a coordinate that is not finite or beyond 1e6.
 Mesh load_mesh(const std::filesystem::path& path, const MeshLimits& limits = {});
 
 }  // namespace scatter

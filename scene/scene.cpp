@@ -27,18 +27,19 @@ void parse_mesh(JsonObject obj, const std::filesystem::path& base_dir, Scene& sc
     if (!report.watertight())
       throw ValidationError(obj.path("file"), "mesh " + file.string() + " is not watertight (" +
                                                   report.summary() + "); it cannot bound a volume");
+    // A closed mesh can still enclose nothing (a point, a flat double-sided sheet).
+    Aabb b = scene.mesh.bounds();
+    Vec3 s = b.size();
+    double longest = std::max({s.x, s.y, s.z});
+    if (!(std::abs(scene.mesh.volume()) > 1e-9 * s.x * s.y * s.z) || longest <= 0)
+      throw ValidationError(obj.path("file"), "mesh " + file.string() + " encloses no volume");
     if (fit) {
       // Centre on the origin and scale so the longest side of the bounding box is `fit`.
-      Aabb b = scene.mesh.bounds();
-      Vec3 s = b.size();
-      double longest = std::max({s.x, s.y, s.z});
       scene.mesh.transform(1.0, -b.center());
       scale *= *fit / longest;
     }
     scene.mesh.transform(scale, translate);
-    if (scene.mesh.volume() < 0)
-      for (size_t t = 0; t < scene.mesh.indices.size(); t += 3)
-        std::swap(scene.mesh.indices[t + 1], scene.mesh.indices[t + 2]);
+    scene.mesh.orient_outwards();
     scene.mesh.compute_normals();
   }
   obj.finish();

@@ -14,12 +14,6 @@ void basis(const Vec3& axis, Vec3& u, Vec3& v) {
   v = cross(axis, u);
 }
 
-// Flips every triangle if the tessellation came out inside-out.
-void orient_outwards(Mesh& m) {
-  if (m.volume() < 0)
-    for (size_t t = 0; t < m.indices.size(); t += 3) std::swap(m.indices[t + 1], m.indices[t + 2]);
-}
-
 Mesh sphere_mesh(const Shape& s, int detail) {
   // Latitude rings between the poles; the poles are single vertices so the mesh is watertight.
   int rings = std::max(4, detail / 2), cols = std::max(6, detail);
@@ -46,7 +40,7 @@ Mesh sphere_mesh(const Shape& s, int detail) {
                                          ring(r + 1, c + 1), ring(r, c + 1)});
   m.normals.reserve(m.positions.size());
   for (const auto& p : m.positions) m.normals.push_back(normalize(p - s.center));
-  orient_outwards(m);
+  m.orient_outwards();
   return m;
 }
 
@@ -94,7 +88,7 @@ Mesh torus_mesh(const Shape& s, int detail) {
       uint32_t d = ((r + 1) % rings) * cols + c, e = ((r + 1) % rings) * cols + (c + 1) % cols;
       m.indices.insert(m.indices.end(), {a, e, b, a, d, e});
     }
-  orient_outwards(m);
+  m.orient_outwards();
   return m;
 }
 

@@ -62,27 +62,38 @@ class MeshSolid : public Solid {
   }
 
   // Appends the z at which the vertical line through (x, y) crosses triangle t, if it does.
-  // Edges are half-open by a consistent tie rule (edge function >= 0 on one side, > 0 on the other)
-  // so that a line through a shared edge or vertex is counted exactly once.
+  // A line through a shared edge or vertex must be counted exactly once: the edge function is
+  // evaluated with the edge's endpoints in a fixed (lexicographic) order, so the two triangles
+  // sharing an edge compute bit-identical values of opposite sign, and a zero value is owned by
+  // one side only (a top-left style rule that depends on the edge, not on the triangle).
   void crossing(uint32_t t, double x, double y, std::vector<double>& out) const {
     const Vec3& a = mesh_.positions[mesh_.indices[3 * t]];
     const Vec3& b = mesh_.positions[mesh_.indices[3 * t + 1]];
     const Vec3& c = mesh_.positions[mesh_.indices[3 * t + 2]];
-    auto edge = [&](const Vec3& p, const Vec3& q) {
-      return (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
-    };
-    double w0 = edge(b, c), w1 = edge(c, a), w2 = edge(a, b);
-    double area = w0 + w1 + w2;
-    if (area == 0) return;  // the triangle is parallel to the column
-    auto owns = [&](double w, const Vec3& p, const Vec3& q) {
-      if (w != 0) return (w > 0) == (area > 0);
-      // Top-left style rule on the edge itself, made orientation independent.
-      double dx = q.x - p.x, dy = q.y - p.y;
-      bool tl = dy > 0 || (dy == 0 && dx < 0);
-      return area > 0 ? tl : !tl;
-    };
-    if (!owns(w0, b, c) || !owns(w1, c, a) || !owns(w2, a, b)) return;
-    out.push_back((w0 * a.z + w1 * b.z + w2 * c.z) / area);
+    // Orientation of the triangle's projection, from its vertices alone.
+    double area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    if (area == 0) return;  // edge-on to the column
+    double w0 = edge(b, c, x, y), w1 = edge(c, a, x, y), w2 = edge(a, b, x, y);
+    if (!owns(w0, b, c, area) || !owns(w1, c, a, area) || !owns(w2, a, b, area)) return;
+    double sum = w0 + w1 + w2;
+    if (sum == 0) return;
+    out.push_back((w0 * a.z + w1 * b.z + w2 * c.z) / sum);
+  }
+
+  static bool before(const Vec3& p, const Vec3& q) { return p.x < q.x || (p.x == q.x && p.y < q.y); }
+
+  // Which side of the directed edge p -> q the point (x, y) lies on; antisymmetric bit for bit.
+  static double edge(const Vec3& p, const Vec3& q, double x, double y) {
+    if (before(q, p)) return -edge(q, p, x, y);
+    return (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
+  }
+
+  // Whether a point with edge value w is inside with respect to edge p -> q of a triangle whose
+  // projection has orientation `area`. On the edge (w == 0) exactly one of the two triangles that
+  // share it (seeing it as p -> q and q -> p) owns the point.
+  static bool owns(double w, const Vec3& p, const Vec3& q, double area) {
+    if (w != 0) return (w > 0) == (area > 0);
+    return before(p, q) == (area > 0);
   }
 
   const Mesh& mesh_;

@@ -19,10 +19,11 @@ class Solid {
 };
 
 // A watertight triangle mesh; the parity of crossings along +z decides (concave meshes included).
+// The solid keeps a reference: `mesh` must outlive it.
 std::unique_ptr<Solid> make_mesh_solid(const Mesh& mesh);
 // An analytic shape's exact inside test.
 std::unique_ptr<Solid> make_shape_solid(const Shape& shape);
-// The scene's solid: the exact shape when there is one, else its mesh.
+// The scene's solid: the exact shape when there is one, else its mesh (`scene` must outlive it).
 std::unique_ptr<Solid> make_solid(const Scene& scene);
 
 }  // namespace scatter

@@ -1,5 +1,8 @@
 #include "scene/voxelizer.hpp"
 
+#include <cmath>
+#include <exception>
+#include <stdexcept>
 #include <thread>
 
 #include "scene/solid.hpp"
@@ -9,15 +12,22 @@ namespace {
 
 enum Class : char { kOutside = 0, kMedium = 1, kBlocked = 2 };
 
-// Runs body(j) for j in [0, n) on `threads` threads.
+// Runs body(j) for j in [0, n) on `threads` threads; the first exception is rethrown here.
 template <class F>
 void parallel_rows(int n, int threads, F body) {
   std::vector<std::thread> pool;
+  std::vector<std::exception_ptr> errors(threads);
   for (int t = 0; t < threads; ++t)
     pool.emplace_back([&, t] {
-      for (int j = t; j < n; j += threads) body(j);
+      try {
+        for (int j = t; j < n; j += threads) body(j);
+      } catch (...) {
+        errors[t] = std::current_exception();
+      }
     });
   for (auto& th : pool) th.join();
+  for (auto& e : errors)
+    if (e) std::rethrow_exception(e);
 }
 
 struct VoxelSums {
@@ -41,6 +51,8 @@ VoxelGrid voxelize(const Scene& scene, const VoxelizeOptions& options) {
   Vec3 size = b.size();
   VoxelGrid g;
   g.voxel = std::max({size.x, size.y, size.z}) / options.resolution;
+  if (!(g.voxel > 0) || !std::isfinite(g.voxel) || options.resolution < 1 || options.resolution > 4096)
+    throw std::invalid_argument("cannot voxelize: the solid has no extent or the resolution is invalid");
   g.nx = static_cast<int>(std::ceil(size.x / g.voxel)) + 2;
   g.ny = static_cast<int>(std::ceil(size.y / g.voxel)) + 2;
   g.nz = static_cast<int>(std::ceil(size.z / g.voxel)) + 2;

@@ -16,12 +16,29 @@ struct RenderOptions {
   std::string pipeline = "surface";
   std::string out;
   std::string terms;
-  int width = 0, height = 0;
+  int width = -1, height = -1;  // -1: as the scene says
   double exposure = 1.0;
   std::string device;
   std::vector<std::string> settings;
   bool json = false;
 };
+
+// Mean radiance per channel and the fraction of pixels that differ from the background: a quick
+// check that a render shows something.
+nlohmann::json image_stats(const Image& image, const Vec3& background) {
+  double mean[3] = {0, 0, 0};
+  size_t covered = 0, pixels = size_t(image.width) * image.height;
+  for (size_t p = 0; p < pixels; ++p) {
+    bool differs = false;
+    for (int c = 0; c < 3; ++c) {
+      mean[c] += image.rgb[3 * p + c];
+      differs = differs || std::abs(image.rgb[3 * p + c] - background[c]) > 1e-6;
+    }
+    covered += differs;
+  }
+  return {{"mean", {mean[0] / pixels, mean[1] / pixels, mean[2] / pixels}},
+          {"coverage", double(covered) / pixels}};
+}
 
 // "out.exr" -> "out.stderr.exr": where the standard error of a Monte Carlo render goes.
 std::filesystem::path std_error_path(const std::filesystem::path& out) {
@@ -33,14 +50,15 @@ int run_render(const RenderOptions& o) {
   SceneLimits limits;
   Scene scene = load_scene(o.scene, limits);
   auto check_side = [&](int v, const char* name) {
-    if (v < 0 || v > limits.max_image)
+    if (v != -1 && (v < 1 || v > limits.max_image))
       throw ValidationError(name, "must be in [1, " + std::to_string(limits.max_image) + "], got " +
                                       std::to_string(v));
   };
   check_side(o.width, "--width");
   check_side(o.height, "--height");
-  if (o.width) scene.width = o.width;
-  if (o.height) scene.height = o.height;
+  if (o.width > 0) scene.width = o.width;
+  if (o.height > 0) scene.height = o.height;
+  check_image_path(o.out);  // before the render, not after it
 
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
   auto pipeline = make_pipeline(o.pipeline, gpu);
@@ -72,6 +90,7 @@ int run_render(const RenderOptions& o) {
                         {"total_ms", total},            {"output", o.out},
                         {"width", result.image.width},  {"height", result.image.height}};
     if (!std_error_file.empty()) j["std_error_output"] = std_error_file;
+    j["stats"] = image_stats(result.image, scene.background);
     std::cout << j.dump() << "\n";
   } else {
     std::cout << "wrote " << o.out << " (" << result.image.width << "x" << result.image.height

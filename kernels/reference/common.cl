@@ -187,6 +187,7 @@ Light load_light(__global const float* l, int i) {
 }
 
 float smooth_step(float e0, float e1, float x) {
+  if (e1 <= e0) return x >= e0 ? 1.0f : 0.0f;
   float t = clamp((x - e0) / (e1 - e0), 0.0f, 1.0f);
   return t * t * (3.0f - 2.0f * t);
 }

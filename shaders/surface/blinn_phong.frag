@@ -39,8 +39,11 @@ void main() {
       float r2 = max(dot(d, d), 1e-12);
       l = d * inversesqrt(r2);
       e /= r2;
-      if (light_type[i] == SPOT)
-        e *= smoothstep(light_cone[i].x, light_cone[i].y, dot(-l, light_direction[i]));
+      if (light_type[i] == SPOT) {
+        float c = dot(-l, light_direction[i]);  // smoothstep is undefined for equal edges
+        e *= light_cone[i].y > light_cone[i].x ? smoothstep(light_cone[i].x, light_cone[i].y, c)
+                                               : step(light_cone[i].x, c);
+      }
     }
     float cos_i = dot(n, l);
     if (cos_i <= 0.0) continue;

@@ -20,6 +20,18 @@ TEST(GlContext, IsOpenGL45Core) {
   EXPECT_FALSE(gl.renderer().empty());
 }
 
+// EGL gives every caller the same display: destroying one context must leave the others working.
+TEST(GlContext, DestroyingOneContextLeavesOthersWorking) {
+  auto first = std::make_unique<GlContext>();
+  GlContext second;
+  first.reset();
+  EXPECT_NO_THROW(second.make_current());
+  GlObject t = GlObject::create(GlKind::Texture);
+  EXPECT_NE(t.get(), 0u);
+  t.reset();
+  test::shared_gpu().gl().make_current();
+}
+
 TEST(GlObject, MoveTransfersOwnershipAndResetDeletes) {
   test::shared_gpu().gl().make_current();
   GlObject a = GlObject::create(GlKind::Texture);

@@ -9,7 +9,7 @@ namespace {
 
 std::string error_for(const nlohmann::json& scene) {
   try {
-    parse_scene(scene, test::scratch_dir("scene_errors"));
+    parse_scene(scene, ".");
   } catch (const std::exception& e) {
     return e.what();
   }
@@ -107,6 +107,28 @@ TEST(Scene, MissingSectionsAndMeshProblems) {
     EXPECT_EQ(std::string(e.what()),
               "scene.mesh.file: mesh open.obj is not watertight (4 boundary edges, 0 non-manifold "
               "edges, 0 inconsistently oriented edges); it cannot bound a volume");
+  }
+}
+
+TEST(Scene, MeshesThatBoundNoVolumeOrHoldBadNumbersAreRejected) {
+  auto dir = test::scratch_dir("scene_bad_meshes");
+  nlohmann::json s = test::minimal_scene();
+  // Two triangles back to back: closed in the edge sense, but flat.
+  test::write_file(dir / "flat.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 2\n");
+  s["mesh"] = {{"file", "flat.obj"}};
+  try {
+    parse_scene(s, dir);
+    FAIL();
+  } catch (const ValidationError& e) {
+    EXPECT_EQ(std::string(e.what()), "scene.mesh.file: mesh flat.obj encloses no volume");
+  }
+  test::write_file(dir / "nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
+  s["mesh"] = {{"file", "nan.obj"}};
+  try {
+    parse_scene(s, dir);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("not finite"), std::string::npos) << e.what();
   }
 }
 

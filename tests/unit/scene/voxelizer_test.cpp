@@ -91,3 +91,52 @@ TEST(Voxelizer, ThreadCountDoesNotChangeTheGrid) {
 
 }  // namespace
 }  // namespace scatter
+
+namespace scatter {
+namespace {
+
+Vec3 rotate(const Vec3& v, const Vec3& axis, double angle) {
+  Vec3 k = normalize(axis);
+  return v * std::cos(angle) + cross(k, v) * std::sin(angle) + k * dot(k, v) * (1 - std::cos(angle));
+}
+
+// Columns through the exact xy of vertices and edge midpoints: the line crosses shared edges and
+// vertices, and each crossing must count once, or parity flips inside and outside.
+TEST(MeshSolid, ColumnsThroughEdgesAndVerticesCountEachCrossingOnce) {
+  Shape sphere;
+  Mesh m = sphere.tessellate(32);
+  for (auto& p : m.positions) p = rotate(p, {0.3, 0.5, 0.8}, 0.7);
+  auto solid = make_mesh_solid(m);
+  std::vector<Vec3> probes;
+  for (size_t t = 0; t < m.indices.size(); t += 3)
+    for (int e = 0; e < 3; ++e) {
+      const Vec3& a = m.positions[m.indices[t + e]];
+      const Vec3& b = m.positions[m.indices[t + (e + 1) % 3]];
+      probes.push_back(a);
+      probes.push_back((a + b) * 0.5);
+    }
+  int wrong = 0, tested = 0;
+  std::vector<char> in;
+  for (const Vec3& p : probes) {
+    double r = std::hypot(p.x, p.y);
+    if (r > 0.9) continue;  // near the silhouette the tessellation and the sphere differ
+    solid->classify_column(p.x, p.y, {-2.0, 0.0, 2.0}, in);
+    wrong += in != std::vector<char>{0, 1, 0};
+    ++tested;
+  }
+  EXPECT_GT(tested, 1000);
+  EXPECT_EQ(wrong, 0);
+  // An axis-aligned box: the column x = y = 0 runs along the diagonal both caps are split on.
+  Shape box;
+  box.kind = Shape::Kind::Box;
+  Mesh bm = box.tessellate();
+  auto bs = make_mesh_solid(bm);
+  bs->classify_column(0, 0, {-2.0, 0.0, 2.0}, in);
+  EXPECT_EQ(in, (std::vector<char>{0, 1, 0}));
+  bs->classify_column(1.0, 1.0, {0.0}, in);  // a corner edge of the box: on the boundary
+  bs->classify_column(0.5, -0.5, {0.0, 1.5}, in);
+  EXPECT_EQ(in, (std::vector<char>{1, 0}));
+}
+
+}  // namespace
+}  // namespace scatter

@@ -115,17 +115,5 @@ TEST(SurfacePipeline, PlanAndTermsAreChecked) {
   EXPECT_THROW(p.render(s, {Terms::Multiple}), ValidationError);
 }
 
-TEST(PipelineFactory, KnowsSurfaceAndRejectsUnknownNames) {
-  EXPECT_EQ(make_pipeline("surface", test::shared_gpu())->name(), "surface");
-  try {
-    make_pipeline("magic", test::shared_gpu());
-    FAIL();
-  } catch (const ValidationError& e) {
-    EXPECT_EQ(std::string(e.what()), "pipeline: unknown pipeline \"magic\" (known: surface)");
-  }
-  EXPECT_EQ(parse_terms("multiple"), Terms::Multiple);
-  EXPECT_THROW(parse_terms("everything"), ValidationError);
-}
-
 }  // namespace
 }  // namespace scatter
