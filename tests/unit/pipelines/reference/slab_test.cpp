@@ -120,6 +120,37 @@ TEST(ReferenceSlab, ConservativeSlabsConserveEnergy) {
   EXPECT_EQ(half.T, 0);
 }
 
+// Chandrasekhar's H-function for isotropic scattering with albedo a, by fixed-point iteration of
+// 1 / H(mu) = sqrt(1 - a) + (a / 2) Int_0^1 mu' H(mu') / (mu + mu') dmu' on a midpoint grid.
+double chandrasekhar_h(double a, double mu) {
+  const int n = 2000;
+  std::vector<double> x(n), h(n, 1.0);
+  for (int i = 0; i < n; ++i) x[i] = (i + 0.5) / n;
+  auto eval = [&](double m) {
+    double s = 0;
+    for (int j = 0; j < n; ++j) s += x[j] * h[j] / (m + x[j]);
+    return 1.0 / (std::sqrt(1 - a) + a / 2 * s / n);
+  };
+  for (int it = 0; it < 200; ++it) {
+    std::vector<double> next(n);
+    for (int i = 0; i < n; ++i) next[i] = eval(x[i]);
+    h = next;
+  }
+  return eval(mu);
+}
+
+// A half-space of isotropic scatterers returns 1 - H(mu0) sqrt(1 - a) of a collimated beam
+// (Chandrasekhar, Radiative Transfer, the plane albedo).
+TEST(ReferenceSlab, HalfSpaceMatchesChandrasekhar) {
+  for (double a : {0.5, 0.9, 0.99})
+    for (double mu0 : {1.0, 0.4}) {
+      SlabResult r = slab({.tau = INFINITY, .albedo = a, .g = 0, .mu0 = mu0, .photons = 400'000});
+      double expected = 1 - chandrasekhar_h(a, mu0) * std::sqrt(1 - a);
+      EXPECT_NEAR(r.R, expected, 4 * r.R_stderr + 1e-4) << "a " << a << " mu0 " << mu0;
+      EXPECT_LT(r.lost, 1e-4);
+    }
+}
+
 TEST(ReferenceSlab, RejectsBadParameters) {
   EXPECT_THROW(slab({.tau = -1}), ValidationError);
   EXPECT_THROW(slab({.albedo = 1.5}), ValidationError);
