@@ -5,11 +5,13 @@
 #include "pipelines/cl_scene.hpp"
 #include "pipelines/stage_clock.hpp"
 #include "protocol/json_reader.hpp"
+#include "scene/bvh.hpp"
 
 namespace scatter {
 namespace {
 
-const std::vector<std::string> kProgram = {"kernels/reference/common.cl"};
+const std::vector<std::string> kProgram = {"kernels/reference/common.cl",
+                                           "kernels/reference/boundary.cl"};
 
 std::vector<std::string> program(const char* file) {
   auto p = kProgram;
@@ -47,11 +49,13 @@ ReferenceSettings ReferenceSettings::read(const Settings& settings) {
 Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   ReferenceSettings s = ReferenceSettings::read(request.settings);
-  if (scene.medium.ior != 1.0)
-    throw ValidationError("scene.medium.ior",
-                          "the reference pipeline renders index-matched media only (ior 1) so far");
   Plan p{name(), request.terms, {}};
   p.stages.push_back({"voxelize", true, std::to_string(scene.voxels) + " voxels on the long side"});
+  if (scene.medium.ior != 1.0)
+    p.stages.push_back({"boundary", true, "ior " + std::to_string(scene.medium.ior) +
+                                              ": BVH over the mesh for Fresnel and refraction"});
+  else
+    p.stages.push_back({"boundary", false, "index matched (ior 1): no reflection or refraction"});
   p.stages.push_back({"upload", true, "medium, per-brick majorants (8^3 voxels), lights, camera"});
   if (marches(s, request.terms)) {
     p.stages.push_back({"march", true, "deterministic single scattering, step " +
@@ -74,8 +78,20 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   StageClock clock(result.timings);
   VoxelGrid grid = voxelize(scene, {.resolution = scene.voxels});
   clock.stop("voxelize");
+  const bool dielectric = scene.medium.ior != 1.0;
+  FlatBvh bvh;
+  if (dielectric) {
+    bvh = build_bvh(scene.mesh);
+    clock.stop("boundary");
+  }
 
   gpu::ClContext& cl = gpu_.cl();
+  cl::Buffer bvh_bounds = upload(cl, bvh.bounds);
+  cl::Buffer bvh_tris = upload(cl, bvh.triangles);
+  cl::Buffer bvh_links(cl.context(), CL_MEM_READ_ONLY, std::max<size_t>(bvh.links.size(), 1) * sizeof(int32_t));
+  if (!bvh.links.empty())
+    cl.queue().enqueueWriteBuffer(bvh_links, CL_TRUE, 0, bvh.links.size() * sizeof(int32_t), bvh.links.data());
+  const float ior = static_cast<float>(scene.medium.ior);
   ClMedium medium = upload_medium(cl, grid);
   cl::Buffer lights = upload(cl, pack_lights(scene.lights));
   cl::Buffer camera = upload(cl, pack_camera(scene.camera, scene.width, scene.height));
@@ -93,7 +109,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, floats * sizeof(float));
     cl::Kernel k(cl.program(program("kernels/reference/single_march.cl")), "single_march");
     gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz, medium.sigma_s,
-                  medium.sigma_t, lights, light_count, g, camera, w, h, float(s.step), out);
+                  medium.sigma_t, lights, light_count, g, camera, w, h, float(s.step), ior,
+                  bvh_bounds, bvh_links, bvh_tris, out);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     clock.stop("march");
@@ -114,7 +131,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz,
                   medium.bricks.brick, medium.bricks.bx, medium.bricks.by, medium.bricks.bz,
                   medium.sigma_s, medium.sigma_t, medium.majorant, lights, light_count, g, camera,
-                  w, h, terms, n, done, s.seed, s.max_depth, sum, sum_sq);
+                  w, h, terms, n, done, s.seed, s.max_depth, ior, bvh_bounds, bvh_links, bvh_tris,
+                  sum, sum_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     if (request.progress) request.progress(double(done + n) / s.spp);

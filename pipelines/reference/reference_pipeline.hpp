@@ -1,5 +1,7 @@
 // `reference`: ground truth in OpenCL, for the voxelized medium (each voxel holds constant
-// sigma_s, sigma_a; the mesh boundary is index matched).
+// sigma_s, sigma_a). With ior != 1 the mesh is a dielectric boundary (kernels/reference/
+// boundary.cl): view rays and paths reflect and refract with Fresnel's weights; shadow rays to
+// the (point-like) lights go straight, weighted by the Fresnel transmittance of each crossing.
 //
 //   single term, default    deterministic ray marcher (kernels/reference/single_march.cl)
 //   single term, mc=1       Monte Carlo, NEE at the first vertex only

@@ -1,0 +1,91 @@
+// The mesh boundary of a dielectric medium (ior != 1): closest hits through the flattened BVH
+// (scene/bvh.hpp), reflection and refraction, and the Fresnel transmittance of a straight shadow
+// ray. Point and directional lights cannot be reached through a refracting surface by a sampled
+// direction, so shadow rays go straight and are weighted by (1 - F) at each crossing; view rays and
+// paths refract exactly.
+
+typedef struct {
+  __global const float* bounds;  // 8 floats per node
+  __global const int* links;     // 2 ints per node
+  __global const float* tris;    // 12 floats per triangle
+} Bvh;
+
+#define BOUNDARY_EPS 1e-4f
+
+bool box_hit(__global const float* b, float3 o, float3 inv, float t0, float t1) {
+  float3 lo = (float3)(b[0], b[1], b[2]), hi = (float3)(b[4], b[5], b[6]);
+  float3 a = (lo - o) * inv, c = (hi - o) * inv;
+  float3 mn = fmin(a, c), mx = fmax(a, c);
+  float n = fmax(fmax(mn.x, mn.y), fmax(mn.z, t0));
+  float f = fmin(fmin(mx.x, mx.y), fmin(mx.z, t1));
+  return n <= f;
+}
+
+// Closest intersection with t in (t0, t1): its distance and the triangle's unit normal (outward
+// for a mesh wound counter-clockwise seen from outside, as scene meshes are).
+bool mesh_hit(Bvh bvh, float3 o, float3 d, float t0, float t1, float* t_hit, float3* normal) {
+  float3 inv = 1.0f / d;
+  int stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  float best = t1;
+  bool found = false;
+  while (top > 0) {
+    int node = stack[--top];
+    if (!box_hit(bvh.bounds + 8 * node, o, inv, t0, best)) continue;
+    int a = bvh.links[2 * node], count = bvh.links[2 * node + 1];
+    if (count == 0) {
+      if (top < 62) {
+        stack[top++] = a;
+        stack[top++] = node + 1;
+      }
+      continue;
+    }
+    for (int i = 0; i < count; ++i) {
+      __global const float* t = bvh.tris + 12 * (a + i);
+      float3 v0 = (float3)(t[0], t[1], t[2]);
+      float3 e1 = (float3)(t[4], t[5], t[6]) - v0, e2 = (float3)(t[8], t[9], t[10]) - v0;
+      float3 p = cross(d, e2);
+      float det = dot(e1, p);
+      if (fabs(det) < 1e-20f) continue;
+      float3 s = o - v0;
+      float u = dot(s, p) / det;
+      if (u < 0.0f || u > 1.0f) continue;
+      float3 q = cross(s, e1);
+      float v = dot(d, q) / det;
+      if (v < 0.0f || u + v > 1.0f) continue;
+      float th = dot(e2, q) / det;
+      if (th > t0 && th < best) {
+        best = th;
+        *normal = normalize(cross(e1, e2));
+        found = true;
+      }
+    }
+  }
+  *t_hit = best;
+  return found;
+}
+
+float3 reflect_dir(float3 d, float3 n) { return d - 2.0f * dot(d, n) * n; }
+
+// Refraction of d through a surface with unit normal n facing the incident side (dot(d, n) < 0),
+// eta = n_incident / n_transmitted, cos_t from fresnel().
+float3 refract_dir(float3 d, float3 n, float eta, float cos_t) {
+  float cos_i = -dot(d, n);
+  return normalize(eta * d + (eta * cos_i - cos_t) * n);
+}
+
+// Product of (1 - F) over the boundary crossings of the straight segment o + t d, t in (0, tmax).
+float boundary_transmittance(Bvh bvh, float ior, float3 o, float3 d, float tmax) {
+  float tr = 1.0f, t0 = 0.0f;
+  for (int k = 0; k < 32 && tr > 0.0f; ++k) {
+    float t;
+    float3 n;
+    if (!mesh_hit(bvh, o, d, t0 + BOUNDARY_EPS, tmax, &t, &n)) break;
+    float c = dot(d, n);  // > 0: leaving the medium
+    float cos_t;
+    tr *= 1.0f - fresnel(fabs(c), c > 0.0f ? ior : 1.0f / ior, &cos_t);
+    t0 = t;
+  }
+  return tr;
+}
