@@ -29,4 +29,13 @@ Mat4 perspective(double fov_y, double aspect, double z_near, double z_far) {
   return r;
 }
 
+Mat4 orthographic(double h, double z_near, double z_far) {
+  Mat4 r = Mat4::identity();
+  r.at(0, 0) = static_cast<float>(1 / h);
+  r.at(1, 1) = static_cast<float>(1 / h);
+  r.at(2, 2) = static_cast<float>(-2 / (z_far - z_near));
+  r.at(2, 3) = static_cast<float>(-(z_far + z_near) / (z_far - z_near));
+  return r;
+}
+
 }  // namespace scatter

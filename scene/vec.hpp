@@ -80,5 +80,7 @@ struct Mat4 {
 Mat4 look_at(const Vec3& eye, const Vec3& target, const Vec3& up);
 // OpenGL clip-space perspective projection; fov_y in radians.
 Mat4 perspective(double fov_y, double aspect, double z_near, double z_far);
+// OpenGL clip-space orthographic projection of the box [-h, h]^2 x [near, far] in view space.
+Mat4 orthographic(double half_extent, double z_near, double z_far);
 
 }  // namespace scatter

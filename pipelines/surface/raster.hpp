@@ -38,6 +38,9 @@ class RenderTarget {
   // Window-space depth in [0, 1], row 0 at the top.
   std::vector<float> read_depth() const;
   GLuint depth_texture() const { return depth_.get(); }
+  GLuint color_texture() const { return color_.get(); }
+  int width() const { return width_; }
+  int height() const { return height_; }
 
  private:
   int width_, height_;

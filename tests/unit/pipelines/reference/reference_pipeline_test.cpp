@@ -136,7 +136,7 @@ TEST(ReferencePipeline, MarcherAndMonteCarloAgreeOnShippedScenes) {
 }
 
 TEST(ReferencePipeline, HalvingTheMarchStepChangesLittle) {
-  for (const char* name : {"sphere", "layers"}) {
+  for (const char* name : {"sphere", "cube-torus", "layers", "bunny"}) {
     Scene s = small(name, 48, 48);
     Image a = render(s, Terms::Single, {{"step", 0.25}}).image;
     Image b = render(s, Terms::Single, {{"step", 0.125}}).image;

@@ -1,0 +1,210 @@
+#include "pipelines/thickness/thickness_pipeline.hpp"
+
+#include <memory>
+#include <numbers>
+
+#include "pipelines/stage_clock.hpp"
+#include "pipelines/surface/raster.hpp"
+#include "protocol/json_reader.hpp"
+
+namespace scatter {
+namespace {
+
+struct ThicknessSettings {
+  int steps = 32;
+  int shadow_size = 1024;
+  static ThicknessSettings read(const Settings& settings) {
+    SettingsReader r(settings, "thickness");
+    ThicknessSettings s;
+    s.steps = r.integer("steps", s.steps, 1, 1024);
+    s.shadow_size = r.integer("shadow_size", s.shadow_size, 64, 8192);
+    r.finish();
+    return s;
+  }
+};
+
+// Where a light's shadow map looks from and how it projects; `origin` and `direction` define the
+// distance the map stores (along rays from a point, or along the direction for directional light).
+struct LightView {
+  Mat4 view, projection;
+  Vec3 origin, direction;
+  bool along_direction = false;
+};
+
+LightView light_view(const Light& l, const Scene& scene) {
+  Aabb b = scene.mesh.bounds();
+  Vec3 c = b.center();
+  double radius = length(b.size()) / 2 * 1.02;
+  LightView v;
+  if (l.type == Light::Type::Directional) {
+    v.direction = l.direction;
+    v.origin = c - l.direction * (2 * radius);
+    v.along_direction = true;
+    Vec3 up = std::abs(l.direction.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+    v.view = look_at(v.origin, c, up);
+    v.projection = orthographic(radius, radius * 0.5, radius * 3.5);
+    return v;
+  }
+  double dist = length(c - l.position);
+  if (dist <= radius * 1.01)
+    throw ValidationError("scene.lights", "the thickness pipeline needs every point or spot light "
+                                          "outside the object's bounding sphere");
+  v.origin = l.position;
+  v.direction = normalize(c - l.position);
+  Vec3 up = std::abs(v.direction.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+  v.view = look_at(l.position, c, up);
+  double half_angle = std::asin(radius / dist);
+  v.projection = perspective(2 * half_angle * 1.02, 1.0, std::max(dist - radius, dist * 1e-3), dist + radius);
+  return v;
+}
+
+// "name[i]", for uniform arrays.
+std::string indexed(const char* name, size_t i) {
+  std::string s = name;
+  s.append("[").append(std::to_string(i)).append("]");
+  return s;
+}
+
+void uniform3(GLuint p, const std::string& name, const Vec3& v) {
+  glProgramUniform3f(p, glGetUniformLocation(p, name.c_str()), float(v.x), float(v.y), float(v.z));
+}
+void uniform1i(GLuint p, const std::string& name, int v) {
+  glProgramUniform1i(p, glGetUniformLocation(p, name.c_str()), v);
+}
+void uniform_matrix(GLuint p, const std::string& name, const Mat4& m) {
+  glProgramUniformMatrix4fv(p, glGetUniformLocation(p, name.c_str()), 1, GL_FALSE, m.m.data());
+}
+
+// Draws the mesh into `target`, writing the distance from view.origin; `peel` with the first
+// layer's texture keeps the second layer.
+void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target, const Mat4& view,
+                   const Mat4& projection, const Vec3& origin, const Vec3& direction,
+                   bool along_direction, GLuint first_layer) {
+  uniform_matrix(program, "view", view);
+  uniform_matrix(program, "projection", projection);
+  uniform3(program, "origin", origin);
+  uniform3(program, "direction", direction);
+  uniform1i(program, "along_direction", along_direction);
+  uniform1i(program, "peel", first_layer != 0);
+  uniform1i(program, "first_layer", 0);
+  glBindTextureUnit(0, first_layer);
+  target.bind_and_clear(Vec3{});
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_CULL_FACE);
+  glUseProgram(program);
+  mesh.draw();
+  glUseProgram(0);
+  glBindTextureUnit(0, 0);
+}
+
+}  // namespace
+
+Plan ThicknessPipeline::plan(const Scene& scene, const RenderRequest& request) {
+  require_terms(*this, request.terms);
+  ThicknessSettings s = ThicknessSettings::read(request.settings);
+  if (!scene.medium.density->homogeneous())
+    throw ValidationError("scene.medium.density", "the thickness pipeline needs a homogeneous "
+                                                  "medium (constant density); use reference");
+  Plan p{name(), request.terms, {}};
+  p.stages.push_back({"bake", false, "homogeneous medium: no optical-depth bake is needed"});
+  p.stages.push_back({"shadow_maps", !scene.lights.empty(),
+                      std::to_string(scene.lights.size()) + " lights, " +
+                          std::to_string(s.shadow_size) + "^2 distance maps"});
+  p.stages.push_back({"depth_peel", true, "front and second surface along each view ray"});
+  p.stages.push_back({"integrate", true, std::to_string(s.steps) + " pieces per view segment"});
+  if (scene.medium.ior != 1.0)
+    p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " +
+                                               std::to_string(scene.medium.ior) + ")"});
+  p.stages.push_back({"readback", true, "linear RGB to the host"});
+  return p;
+}
+
+RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& request) {
+  RenderResult result;
+  result.plan = plan(scene, request);
+  ThicknessSettings s = ThicknessSettings::read(request.settings);
+  gpu_.gl().make_current();
+  if (!distance_program_) {
+    distance_program_ = gpu::build_program("shaders/thickness/distance.vert", "shaders/thickness/distance.frag");
+    integrate_program_ = gpu::build_program("shaders/thickness/integrate.vert", "shaders/thickness/integrate.frag");
+    empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
+  }
+  StageClock clock(result.timings);
+  MeshBuffers mesh(scene.mesh);
+  const GLuint dist = distance_program_.get(), integ = integrate_program_.get();
+
+  // One distance map per light, seen from the light.
+  std::vector<std::unique_ptr<RenderTarget>> shadows;
+  std::vector<Mat4> light_matrices;
+  for (const Light& l : scene.lights) {
+    LightView v = light_view(l, scene);
+    shadows.push_back(std::make_unique<RenderTarget>(s.shadow_size, s.shadow_size));
+    draw_distance(dist, mesh, *shadows.back(), v.view, v.projection, v.origin, v.direction,
+                  v.along_direction, 0);
+    light_matrices.push_back(v.projection * v.view);
+  }
+  glFinish();
+  clock.stop("shadow_maps");
+
+  // Depth peeling from the camera: the first surface, then the next one behind it.
+  CameraMatrices cam = camera_matrices(scene);
+  const Vec3& eye = scene.camera.position;
+  RenderTarget front(scene.width, scene.height), back(scene.width, scene.height);
+  draw_distance(dist, mesh, front, cam.view, cam.projection, eye, Vec3{}, false, 0);
+  draw_distance(dist, mesh, back, cam.view, cam.projection, eye, Vec3{}, false, front.color_texture());
+  glFinish();
+  clock.stop("depth_peel");
+
+  RenderTarget out(scene.width, scene.height);
+  const double to_rad = std::numbers::pi / 180;
+  for (size_t i = 0; i < scene.lights.size(); ++i) {
+    const Light& l = scene.lights[i];
+    LightView v = light_view(l, scene);
+    glBindTextureUnit(static_cast<GLuint>(2 + i), shadows[i]->color_texture());
+    uniform1i(integ, indexed("shadow_maps", i), static_cast<int>(2 + i));
+    uniform_matrix(integ, indexed("light_matrix", i), light_matrices[i]);
+    uniform1i(integ, indexed("light_type", i), l.type == Light::Type::Point ? 0 : (l.type == Light::Type::Directional ? 1 : 2));
+    uniform3(integ, indexed("light_position", i), l.type == Light::Type::Directional ? v.origin : l.position);
+    uniform3(integ, indexed("light_direction", i), l.direction);
+    uniform3(integ, indexed("light_power", i), l.color * l.intensity);
+    glProgramUniform2f(integ, glGetUniformLocation(integ, (indexed("light_cone", i)).c_str()),
+                       float(std::cos(l.outer_deg * to_rad)), float(std::cos(l.inner_deg * to_rad)));
+  }
+  uniform1i(integ, "light_count", static_cast<int>(scene.lights.size()));
+  uniform1i(integ, "front", 0);
+  uniform1i(integ, "back", 1);
+  glBindTextureUnit(0, front.color_texture());
+  glBindTextureUnit(1, back.color_texture());
+  const Camera& c = scene.camera;
+  Vec3 f = normalize(c.target - c.position), r = normalize(cross(f, c.up)), u = cross(r, f);
+  double t = std::tan(c.fov_deg * std::numbers::pi / 360);
+  uniform3(integ, "eye", eye);
+  uniform3(integ, "forward", f);
+  uniform3(integ, "right", r * (t * scene.width / scene.height));
+  uniform3(integ, "up", u * t);
+  glProgramUniform2f(integ, glGetUniformLocation(integ, "size"), float(scene.width), float(scene.height));
+  double density = scene.medium.density->density(Vec3{});
+  uniform3(integ, "sigma_s", scene.medium.sigma_s * density);
+  uniform3(integ, "sigma_t", (scene.medium.sigma_s + scene.medium.sigma_a) * density);
+  glProgramUniform1f(integ, glGetUniformLocation(integ, "g"), float(scene.medium.g));
+  uniform1i(integ, "steps", s.steps);
+  out.bind_and_clear(scene.background);
+  glDisable(GL_DEPTH_TEST);
+  glUseProgram(integ);
+  glBindVertexArray(empty_vao_.get());
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  for (GLuint unit = 0; unit < 2 + scene.lights.size(); ++unit) glBindTextureUnit(unit, 0);
+  gpu::check_gl("thickness integrate");
+  glFinish();
+  clock.stop("integrate");
+
+  result.image = out.read_color();
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  clock.stop("readback");
+  return result;
+}
+
+}  // namespace scatter

@@ -1,0 +1,30 @@
+// `thickness`: single scattering in a homogeneous medium from a shadow map per light and depth
+// peeling (papers/thickness-single-scattering-blog.md). No bake: the front and back surfaces come
+// from two raster passes, the light's path inside the medium from its shadow map, and the
+// in-scattering integral along the view segment is summed over `steps` pieces with the view
+// transmittance integrated exactly in each.
+//
+// Settings: steps (32) pieces per view segment; shadow_size (1024) shadow-map side in texels.
+// Approximations (as the blog): only the first segment inside the object is integrated, the light
+// enters at the surface nearest to it, and refraction and Fresnel at the boundary are neglected.
+#pragma once
+
+#include "gpu/gl_objects.hpp"
+#include "pipelines/pipeline.hpp"
+
+namespace scatter {
+
+class ThicknessPipeline : public Pipeline {
+ public:
+  explicit ThicknessPipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
+  std::string name() const override { return "thickness"; }
+  std::vector<Terms> supported_terms() const override { return {Terms::Single}; }
+  Plan plan(const Scene& scene, const RenderRequest& request) override;
+  RenderResult render(const Scene& scene, const RenderRequest& request) override;
+
+ private:
+  gpu::Gpu& gpu_;
+  gpu::GlObject distance_program_, integrate_program_, empty_vao_;
+};
+
+}  // namespace scatter

@@ -1,0 +1,79 @@
+#version 450 core
+// Single scattering in a homogeneous medium between the first surface A and the second B along
+// each view ray (depth peeling), lit through the shadow maps. The segment is cut into `steps`
+// pieces; in each, the light's path length inside the medium |Cc| is read from the light's shadow
+// map at the piece's midpoint C, and the view transmittance is integrated exactly:
+//   L = sum_k sigma_s p(theta) E(C_k) exp(-sigma_t |C_k c_k|) exp(-sigma_t t_k) (1 - exp(-sigma_t h)) / sigma_t
+// Refraction at the boundary is neglected, as in the blog post this follows.
+const int MAX_LIGHTS = 16;
+const float PI = 3.14159265358979;
+
+uniform sampler2D front;  // distance from the eye to the first surface (0 where none)
+uniform sampler2D back;   // ... to the second surface
+uniform sampler2D shadow_maps[MAX_LIGHTS];
+uniform mat4 light_matrix[MAX_LIGHTS];  // world -> light clip space
+uniform int light_count;
+uniform int light_type[MAX_LIGHTS];     // 0 point, 1 directional, 2 spot
+uniform vec3 light_position[MAX_LIGHTS];  // directional: the shadow map's origin plane point
+uniform vec3 light_direction[MAX_LIGHTS];
+uniform vec3 light_power[MAX_LIGHTS];
+uniform vec2 light_cone[MAX_LIGHTS];
+uniform vec3 eye, forward, right, up;   // right and up scaled by tan(fov / 2) (and aspect)
+uniform vec2 size;
+uniform vec3 sigma_s;
+uniform vec3 sigma_t;
+uniform float g;
+uniform int steps;
+
+layout(location = 0) out vec4 radiance;
+
+float hg(float c) {
+  float d = 1.0 + g * g - 2.0 * g * c;
+  return (1.0 - g * g) / (4.0 * PI * d * sqrt(d));
+}
+
+void main() {
+  ivec2 px = ivec2(gl_FragCoord.xy);
+  float ta = texelFetch(front, px, 0).r, tb = texelFetch(back, px, 0).r;
+  if (ta <= 0.0 || tb <= ta) {
+    radiance = vec4(0.0);
+    return;
+  }
+  // The pixel's ray through its centre; GL's row 0 is the bottom, as is `up` positive.
+  vec2 s = gl_FragCoord.xy / size * 2.0 - 1.0;
+  vec3 d = normalize(forward + right * s.x + up * s.y);
+  float h = (tb - ta) / float(steps);
+  vec3 seg_tr = exp(-sigma_t * h);
+  vec3 w = mix(vec3(h), (1.0 - seg_tr) / max(sigma_t, vec3(1e-12)), greaterThan(sigma_t * h, vec3(1e-4)));
+  vec3 tr = vec3(1.0), sum = vec3(0.0);
+  for (int k = 0; k < steps; ++k) {
+    vec3 c = eye + d * (ta + (float(k) + 0.5) * h);
+    vec3 in_scatter = vec3(0.0);
+    for (int i = 0; i < light_count; ++i) {
+      vec3 e = light_power[i], wl;
+      float dc;  // distance of C from the light's origin, as the shadow map measures it
+      if (light_type[i] == 1) {
+        wl = -light_direction[i];
+        dc = dot(c - light_position[i], light_direction[i]);
+      } else {
+        vec3 to = light_position[i] - c;
+        dc = length(to);
+        wl = to / dc;
+        e /= dc * dc;
+        if (light_type[i] == 2) {
+          float cs = dot(-wl, light_direction[i]);
+          e *= light_cone[i].y > light_cone[i].x ? smoothstep(light_cone[i].x, light_cone[i].y, cs)
+                                                 : step(light_cone[i].x, cs);
+        }
+      }
+      vec4 clip = light_matrix[i] * vec4(c, 1.0);
+      vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
+      float entry = texture(shadow_maps[i], uv).r;
+      float inside = max(dc - entry, 0.0);
+      in_scatter += e * exp(-sigma_t * inside) * hg(dot(wl, d));
+    }
+    sum += tr * w * sigma_s * in_scatter;
+    tr *= seg_tr;
+  }
+  radiance = vec4(sum, 1.0);
+}

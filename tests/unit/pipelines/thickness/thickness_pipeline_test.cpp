@@ -1,0 +1,84 @@
+#include "pipelines/thickness/thickness_pipeline.hpp"
+
+#include <gtest/gtest.h>
+
+#include <numbers>
+
+#include "../../test_util.hpp"
+#include "pipelines/auto_pipeline.hpp"
+#include "pipelines/metrics.hpp"
+#include "pipelines/reference/reference_pipeline.hpp"
+#include "protocol/json_reader.hpp"
+
+namespace scatter {
+namespace {
+
+Image render(Pipeline&& p, const Scene& s, Settings settings = {}) {
+  return p.render(s, {Terms::Single, std::move(settings), nullptr}).image;
+}
+
+// The box [-1, 1]^3 lit from +z by a directional light, seen along the axis: on the centre ray the
+// single-scattered radiance is sigma_s p(-1) E (1 - exp(-4 sigma_t)) / (2 sigma_t).
+TEST(ThicknessPipeline, AxisBoxMatchesClosedForm) {
+  for (double st : {0.2, 1.0, 4.0}) {
+    nlohmann::json j = test::minimal_scene();
+    j["mesh"] = {{"shape", "box"}, {"size", {2, 2, 2}}};
+    j["medium"] = {{"sigma_s", 0.8 * st}, {"sigma_a", 0.2 * st}, {"g", 0.3}};
+    j["lights"] = {{{"type", "directional"}, {"direction", {0, 0, -1}}, {"irradiance", 2.0}}};
+    j["camera"] = {{"position", {0, 0, 4}}, {"fov_deg", 30}};
+    j["image"] = {{"width", 9}, {"height", 9}};
+    Scene s = parse_scene(j, ".");
+    double p = (1 - 0.09) / (4 * std::numbers::pi * std::pow(1.3, 3));
+    double expected = 0.8 * st * p * 2.0 * (1 - std::exp(-4 * st)) / (2 * st);
+    double got = render(ThicknessPipeline(test::shared_gpu()), s, {{"steps", 64}}).at(4, 4).x;
+    // Midpoint rule for the light's transmittance over pieces of 2/64: (st h)^2 / 24 relative.
+    EXPECT_NEAR(got, expected, 2e-3 * expected) << "sigma_t " << st;
+  }
+}
+
+// Against the reference marcher on the homogeneous sphere. The reference sees the medium through
+// its voxels; the gap shrinks as they get finer, which shows it is the reference's voxelization
+// (and not the thickness path) that the remaining difference comes from.
+TEST(ThicknessPipeline, SphereApproachesTheReferenceAsItsVoxelsShrink) {
+  Scene s = load_scene(test::source_path("scenes/sphere.json"));
+  s.width = s.height = 64;
+  Image thickness = render(ThicknessPipeline(test::shared_gpu()), s);
+  std::vector<double> errors;
+  for (int voxels : {48, 96, 144}) {
+    s.voxels = voxels;
+    Image ref = render(ReferencePipeline(test::shared_gpu()), s);
+    errors.push_back(relative_rmse(thickness, ref, coverage_mask(s, voxelize(s, {.resolution = voxels}))));
+  }
+  EXPECT_LT(errors[1], errors[0]);
+  EXPECT_LT(errors[2], errors[1]);
+  EXPECT_LT(errors[2], 0.04);
+}
+
+TEST(ThicknessPipeline, RefusesWhatItCannotRender) {
+  Scene layers = load_scene(test::source_path("scenes/layers.json"));
+  ThicknessPipeline p(test::shared_gpu());
+  EXPECT_THROW(p.render(layers, {Terms::Single, {}, nullptr}), ValidationError);
+  Scene sphere = load_scene(test::source_path("scenes/sphere.json"));
+  EXPECT_THROW(p.render(sphere, {Terms::All, {}, nullptr}), ValidationError);
+  sphere.lights[0].position = {0.2, 0, 0};  // inside the object
+  EXPECT_THROW(p.render(sphere, {Terms::Single, {}, nullptr}), ValidationError);
+}
+
+TEST(AutoPipeline, ChoosesThicknessForHomogeneousSingleAndSaysWhy) {
+  Scene sphere = load_scene(test::source_path("scenes/sphere.json"));
+  Scene layers = load_scene(test::source_path("scenes/layers.json"));
+  EXPECT_EQ(AutoPipeline::choose(sphere, Terms::Single).first, "thickness");
+  EXPECT_EQ(AutoPipeline::choose(sphere, Terms::All).first, "reference");
+  EXPECT_EQ(AutoPipeline::choose(layers, Terms::Single).first, "reference");
+  AutoPipeline a(test::shared_gpu());
+  Plan p = a.plan(sphere, {Terms::Single, {}, nullptr});
+  EXPECT_EQ(p.pipeline, "auto -> thickness");
+  ASSERT_GE(p.stages.size(), 2u);
+  EXPECT_EQ(p.stages[0].name, "choose");
+  EXPECT_EQ(p.stages[1].name, "bake");
+  EXPECT_FALSE(p.stages[1].run);
+  EXPECT_NE(p.stages[1].reason.find("homogeneous"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace scatter
