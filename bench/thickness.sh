@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Figures for the thickness path in docs/BENCHMARKS.md:
+#  - error against the reference single term on sphere.json as the reference's voxels get finer
+#    (128 x 128 pixels; the 256^3 reference takes a few minutes);
+#  - frame time at 512 x 512 with 1 and 8 point lights.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=bench/out
+mkdir -p "$out"
+for v in 64 128 256; do
+  sed "s/\"voxels\": 64/\"voxels\": $v/" scenes/sphere.json > "$out/sphere-v$v.json"
+  build/scatterd bench "$out/sphere-v$v.json" --pipeline thickness --terms single --width 128 \
+    --height 128 --sweep steps=8,32 --csv "$out/thickness-sphere-v$v.csv"
+done
+python3 - "$out" <<'PY'
+import json, sys, math
+out = sys.argv[1]
+scene = json.load(open("scenes/sphere.json"))
+light = scene["lights"][0]
+lights = []
+for k in range(8):
+    a = 2 * math.pi * k / 8
+    lights.append(dict(light, position=[3 * math.cos(a), 2.0, 3 * math.sin(a)], intensity=light["intensity"] / 8))
+scene["lights"] = lights
+json.dump(scene, open(f"{out}/sphere-8lights.json", "w"))
+PY
+build/scatterd bench scenes/sphere.json --pipeline thickness --terms single --sweep steps=32 \
+  --frames 7 --csv "$out/thickness-512-1light.csv"
+build/scatterd bench "$out/sphere-8lights.json" --pipeline thickness --terms single --sweep steps=32 \
+  --frames 7 --csv "$out/thickness-512-8lights.csv"
