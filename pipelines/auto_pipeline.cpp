@@ -5,6 +5,8 @@ namespace scatter {
 std::pair<std::string, std::string> AutoPipeline::choose(const Scene& scene, Terms terms) {
   if (!scene.medium.density->homogeneous())
     return {"reference", "inhomogeneous medium: only the reference renders it so far"};
+  if (scene.medium.ior != 1.0)
+    return {"reference", "a dielectric boundary (ior != 1): thickness neglects Fresnel and refraction"};
   if (terms != Terms::Single)
     return {"reference", "the " + to_string(terms) + " term: only the reference renders it so far"};
   Aabb b = scene.mesh.bounds();

@@ -2,7 +2,9 @@
 
 #include <png.h>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
+#include <fstream>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -17,21 +19,25 @@ unsigned char encode_srgb(double v) {
   return static_cast<unsigned char>(std::lround(s * 255));
 }
 
-void write_png(const Image& image, const std::filesystem::path& path, const ToneMap& tone) {
+void append_bytes(png_structp png, png_bytep data, png_size_t n) {
+  auto* out = static_cast<std::string*>(png_get_io_ptr(png));
+  out->append(reinterpret_cast<const char*>(data), n);
+}
+
+std::string encode_png(const Image& image, const ToneMap& tone) {
   std::vector<unsigned char> bytes = to_srgb8(image, tone);
-  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!file) throw std::runtime_error("cannot write " + path.string());
+  std::string out;
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!info) {
     png_destroy_write_struct(&png, nullptr);
-    throw std::runtime_error("libpng cannot start writing " + path.string());
+    throw std::runtime_error("libpng cannot start encoding");
   }
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    throw std::runtime_error("libpng failed writing " + path.string());
+    throw std::runtime_error("libpng failed encoding a PNG");
   }
-  png_init_io(png, file.get());
+  png_set_write_fn(png, &out, append_bytes, nullptr);
   png_set_IHDR(png, info, image.width, image.height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
@@ -40,22 +46,29 @@ void write_png(const Image& image, const std::filesystem::path& path, const Tone
     png_write_row(png, &bytes[size_t(y) * image.width * 3]);
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
+  return out;
 }
 
-void write_oiio(const Image& image, const std::filesystem::path& path, bool linear,
-                const ToneMap& tone) {
-  auto out = OIIO::ImageOutput::create(path.string());
-  if (!out) throw std::runtime_error("cannot write " + path.string() + ": " + OIIO::geterror());
+// EXR (linear float) and JPEG (sRGB) through OpenImageIO, into memory.
+std::string encode_oiio(const Image& image, const std::string& format, const ToneMap& tone) {
+  const bool linear = format == "exr";
+  std::vector<unsigned char> buffer;
+  OIIO::Filesystem::IOVecOutput proxy(buffer);
+  std::string name = "image." + format;
+  auto out = OIIO::ImageOutput::create(name);
+  if (!out || !out->set_ioproxy(&proxy))
+    throw std::runtime_error("OpenImageIO cannot encode " + format + ": " + OIIO::geterror());
   OIIO::ImageSpec spec(image.width, image.height, 3, linear ? OIIO::TypeDesc::FLOAT
                                                             : OIIO::TypeDesc::UINT8);
-  bool ok = out->open(path.string(), spec);
+  bool ok = out->open(name, spec);
   if (ok && linear) {
     ok = out->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data());
   } else if (ok) {
     std::vector<unsigned char> bytes = to_srgb8(image, tone);
     ok = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
   }
-  if (!ok || !out->close()) throw std::runtime_error("cannot write " + path.string() + ": " + out->geterror());
+  if (!ok || !out->close()) throw std::runtime_error("cannot encode " + format + ": " + out->geterror());
+  return std::string(buffer.begin(), buffer.end());
 }
 
 }  // namespace
@@ -83,12 +96,18 @@ void check_image_path(const std::filesystem::path& path) {
                              ": unknown image type (use .exr, .png or .jpg)");
 }
 
+std::string encode_image(const Image& image, const std::string& format, const ToneMap& tone) {
+  if (format == "png") return encode_png(image, tone);
+  if (format == "exr" || format == "jpg" || format == "jpeg") return encode_oiio(image, format, tone);
+  throw std::runtime_error("unknown image format \"" + format + "\" (use exr, png or jpg)");
+}
+
 void write_image(const Image& image, const std::filesystem::path& path, const ToneMap& tone) {
   check_image_path(path);
-  std::string ext = lower_extension(path);
-  if (ext == ".png") return write_png(image, path, tone);
-  if (ext == ".exr") return write_oiio(image, path, true, tone);
-  return write_oiio(image, path, false, tone);
+  std::string bytes = encode_image(image, lower_extension(path).substr(1), tone);
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
 }
 
 Image read_image(const std::filesystem::path& path) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "scene/vec.hpp"
@@ -29,6 +30,8 @@ struct ToneMap {
 std::vector<unsigned char> to_srgb8(const Image& image, const ToneMap& tone = {});
 // Throws std::runtime_error unless `path` has an extension write_image() knows.
 void check_image_path(const std::filesystem::path& path);
+// Encodes into memory: "exr" (linear float), "png" (libpng), "jpg" (OpenImageIO).
+std::string encode_image(const Image& image, const std::string& format, const ToneMap& tone = {});
 // Writes by extension: .exr (linear float), .png (libpng), .jpg/.jpeg (OpenImageIO).
 // Throws std::runtime_error naming the file on failure or an unknown extension.
 void write_image(const Image& image, const std::filesystem::path& path, const ToneMap& tone = {});

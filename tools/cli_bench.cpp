@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -80,8 +81,12 @@ Reference load_or_render_reference(const BenchOptions& o, const Scene& scene, Te
   }
   auto pipeline = make_pipeline("reference", gpu);
   RenderRequest request{terms, {}, nullptr};
-  if (terms == Terms::Single) request.settings["step"] = 0.125;
-  else request.settings["spp"] = o.reference_spp;
+  if (terms == Terms::Single) {
+    request.settings["step"] = 0.125;
+  } else {
+    request.settings["spp"] = o.reference_spp;
+    request.settings["seed"] = 7919;  // not the swept renders' seed: their noise must be independent
+  }
   std::cerr << "bench: rendering the reference " << path.string() << " ...\n";
   RenderResult r = pipeline->render(scene, request);
   if (!path.parent_path().empty()) std::filesystem::create_directories(path.parent_path());
@@ -103,10 +108,19 @@ int run_bench(BenchOptions o) {
   Settings base = parse_settings(o.settings);
   if (o.frames < 1 || o.frames > 1000) throw ValidationError("--frames", "must be in [1, 1000]");
   if (o.reference.empty()) {
+    // Named by everything the reference depends on, so a changed scene or setting never reuses
+    // a stale file: the scene file's text, the terms, the size, the sample count and the version
+    // of the reference code (bump kReferenceVersion when its results change).
+    constexpr const char* kReferenceVersion = "2";
+    std::ifstream in(o.scene);
+    std::string key((std::istreambuf_iterator<char>(in)), {});
+    key += "|" + o.terms + "|" + std::to_string(scene.width) + "x" + std::to_string(scene.height) +
+           "|" + std::to_string(o.reference_spp) + "|" + kReferenceVersion;
+    char hash[17];
+    std::snprintf(hash, sizeof hash, "%016zx", std::hash<std::string>{}(key));
     auto stem = std::filesystem::path(o.scene).stem().string();
     o.reference = (std::filesystem::path(o.csv).parent_path() /
-                   (stem + "." + o.terms + "." + std::to_string(scene.width) + "x" +
-                    std::to_string(scene.height) + ".reference.exr")).string();
+                   (stem + "." + o.terms + "." + hash + ".reference.exr")).string();
   }
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
   auto pipeline = make_pipeline(o.pipeline, gpu);

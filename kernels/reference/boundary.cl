@@ -81,7 +81,9 @@ float boundary_transmittance(Bvh bvh, float ior, float3 o, float3 d, float tmax)
   for (int k = 0; k < 32 && tr > 0.0f; ++k) {
     float t;
     float3 n;
-    if (!mesh_hit(bvh, o, d, t0 + BOUNDARY_EPS, tmax, &t, &n)) break;
+    // The first search starts at the point itself (a crossing right next to it still counts);
+    // later ones step past the crossing just found.
+    if (!mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + BOUNDARY_EPS, tmax, &t, &n)) break;
     float c = dot(d, n);  // > 0: leaving the medium
     float cos_t;
     tr *= 1.0f - fresnel(fabs(c), c > 0.0f ? ior : 1.0f / ior, &cos_t);

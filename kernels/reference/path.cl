@@ -1,15 +1,15 @@
 // Monte Carlo volumetric path tracer: delta tracking in the voxel medium with per-brick majorants,
 // next-event estimation to every light with ratio-tracked shadow rays, Henyey-Greenstein
-// sampling, Russian roulette on the path weight. One colour channel per sample (cycled), weighted
-// by 3, so chromatic media need no spectral majorants.
+// sampling, Russian roulette on the path weight. Sample s follows colour channel s mod 3 only, so
+// chromatic media need no spectral majorants; the host divides each channel by its own count.
 //
 // With ior != 1 the mesh is a dielectric boundary: paths reflect or refract at it with Fresnel's
 // probabilities (total internal reflection included), tracking inside stops at the surface, and
 // shadow rays carry the Fresnel transmittance of their crossings (see boundary.cl).
 //
 // terms: bit 0 adds light scattered once (NEE at the first vertex), bit 1 light scattered more
-// than once. Each launch adds `spp` samples per pixel to sum and sum_sq (per channel, the squared
-// per-sample values), from which the host takes the mean and its standard error.
+// than once. Each launch adds `spp` samples per pixel to sum and sum_sq of their channel, from
+// which the host takes the mean and its standard error per channel.
 
 // Light arriving at x and scattered into -d, for one channel: sum over the lights.
 float next_event(const Grid* g, __global const float* sigma_t, __global const float* majorant,
@@ -65,7 +65,9 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
     for (int events = 0; events < 4 * max_depth + 64; ++events) {
       float t_surface = INFINITY;
       float3 n;
-      bool hit = dielectric && mesh_hit(bvh, o, d, BOUNDARY_EPS, INFINITY, &t_surface, &n);
+      // From a point in the volume any crossing counts (tmin 0); after a surface event the origin was
+      // already moved off the surface along its normal.
+      bool hit = dielectric && mesh_hit(bvh, o, d, 0.0f, INFINITY, &t_surface, &n);
       float t;
       if (inside && delta_track(&g, sigma_t, majorant, ch, o, d, t_surface, &r, &t)) {
         // A real collision: absorb part of the weight, add light scattered here, scatter on.
@@ -103,9 +105,8 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
         inside = !inside;
       }
     }
-    float contribution = 3.0f * value;
-    acc[ch] += contribution;
-    acc2[ch] += contribution * contribution;
+    acc[ch] += value;
+    acc2[ch] += value * value;
   }
   size_t i = 3 * ((size_t)y * width + x);
   for (int c = 0; c < 3; ++c) {

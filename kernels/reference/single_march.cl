@@ -93,7 +93,7 @@ __kernel void single_march(float3 origin, float voxel, int nx, int ny, int nz,
       if (b.w < 1e-4f) continue;
       float t;
       float3 n;
-      bool hit = mesh_hit(bvh, b.o, b.d, BOUNDARY_EPS, INFINITY, &t, &n);
+      bool hit = mesh_hit(bvh, b.o, b.d, 0.0f, INFINITY, &t, &n);  // origins sit off the surface
       if (b.inside) {
         result[ch] += b.w * march_segment(&g, sigma_s, sigma_t, lights, light_count, g_phase, ch,
                                           b.o, b.d, 0.0f, hit ? t : INFINITY, step, bvh, ior, &tr);

@@ -21,10 +21,13 @@ std::vector<std::string> program(const char* file) {
 
 bool marches(const ReferenceSettings& s, Terms terms) { return terms == Terms::Single && !s.mc; }
 
-// Mean and standard error of the mean from per-sample sums.
-void finish_estimate(const std::vector<float>& sum, const std::vector<float>& sum_sq, double n,
+// Mean and standard error of the mean from per-sample sums; sample s went to channel s mod 3, so
+// channel c has its own count.
+void finish_estimate(const std::vector<float>& sum, const std::vector<float>& sum_sq, int spp,
                      Image& mean, Image& std_error) {
   for (size_t i = 0; i < sum.size(); ++i) {
+    int c = static_cast<int>(i % 3);
+    double n = (spp - c + 2) / 3;  // samples s < spp with s % 3 == c
     double m = sum[i] / n;
     double var = std::max(0.0, sum_sq[i] / n - m * m) * n / std::max(1.0, n - 1);
     mean.rgb[i] = static_cast<float>(m);
@@ -37,7 +40,7 @@ void finish_estimate(const std::vector<float>& sum, const std::vector<float>& su
 ReferenceSettings ReferenceSettings::read(const Settings& settings) {
   SettingsReader r(settings, "reference");
   ReferenceSettings s;
-  s.spp = r.integer("spp", s.spp, 1, 1 << 20);
+  s.spp = r.integer("spp", s.spp, 3, 1 << 20);  // one channel per sample: 3 for a colour
   s.step = r.number("step", s.step, 1e-3, 4);
   s.seed = static_cast<uint32_t>(r.integer("seed", 1, 0, 1 << 30));
   s.max_depth = r.integer("max_depth", s.max_depth, 1, 1 << 20);
@@ -53,7 +56,8 @@ Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
   p.stages.push_back({"voxelize", true, std::to_string(scene.voxels) + " voxels on the long side"});
   if (scene.medium.ior != 1.0)
     p.stages.push_back({"boundary", true, "ior " + std::to_string(scene.medium.ior) +
-                                              ": BVH over the mesh for Fresnel and refraction"});
+                                              ": BVH over the mesh for Fresnel and refraction; "
+                                              "shadow rays are not refracted (approximate)"});
   else
     p.stages.push_back({"boundary", false, "index matched (ior 1): no reflection or refraction"});
   p.stages.push_back({"upload", true, "medium, per-brick majorants (8^3 voxels), lights, camera"});

@@ -76,10 +76,10 @@ void uniform_matrix(GLuint p, const std::string& name, const Mat4& m) {
 }
 
 // Draws the mesh into `target`, writing the distance from view.origin; `peel` with the first
-// layer's texture keeps the second layer.
+// layer's texture keeps the second layer. Texels no surface covers hold `empty`.
 void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target, const Mat4& view,
                    const Mat4& projection, const Vec3& origin, const Vec3& direction,
-                   bool along_direction, GLuint first_layer) {
+                   bool along_direction, GLuint first_layer, float empty = 0.f) {
   uniform_matrix(program, "view", view);
   uniform_matrix(program, "projection", projection);
   uniform3(program, "origin", origin);
@@ -88,7 +88,7 @@ void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target
   uniform1i(program, "peel", first_layer != 0);
   uniform1i(program, "first_layer", 0);
   glBindTextureUnit(0, first_layer);
-  target.bind_and_clear(Vec3{});
+  target.bind_and_clear(Vec3{empty, empty, empty});
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDisable(GL_CULL_FACE);
@@ -141,7 +141,7 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
     LightView v = light_view(l, scene);
     shadows.push_back(std::make_unique<RenderTarget>(s.shadow_size, s.shadow_size));
     draw_distance(dist, mesh, *shadows.back(), v.view, v.projection, v.origin, v.direction,
-                  v.along_direction, 0);
+                  v.along_direction, 0, 1e30f);  // off the object: no medium on the way
     light_matrices.push_back(v.projection * v.view);
   }
   glFinish();
