@@ -14,5 +14,6 @@ Handler add_render_command(CLI::App& app);
 Handler add_devices_command(CLI::App& app);
 Handler add_slab_command(CLI::App& app);
 Handler add_bench_command(CLI::App& app);
+Handler add_serve_command(CLI::App& app);
 
 }  // namespace scatter::tools

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   add(&scatter::tools::add_devices_command);
   add(&scatter::tools::add_slab_command);
   add(&scatter::tools::add_bench_command);
+  add(&scatter::tools::add_serve_command);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,70 @@
+#include "server/server.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "server/http_session.hpp"
+
+namespace scatter::server {
+
+Server::Server(ServerOptions options)
+    : options_(std::move(options)),
+      queue_(options_.gpu),
+      api_(options_.api, queue_, metrics_),
+      workers_(static_cast<size_t>(std::max(1, options_.workers))),
+      acceptor_(io_) {
+  boost::system::error_code ec;
+  auto address = boost::asio::ip::make_address(options_.bind, ec);
+  if (ec) throw std::runtime_error("--bind: \"" + options_.bind + "\" is not an IP address");
+  tcp::endpoint endpoint(address, options_.port);
+  acceptor_.open(endpoint.protocol(), ec);
+  if (!ec) acceptor_.set_option(boost::asio::socket_base::reuse_address(true), ec);
+  if (!ec) acceptor_.bind(endpoint, ec);
+  if (!ec) acceptor_.listen(boost::asio::socket_base::max_listen_connections, ec);
+  if (ec)
+    throw std::runtime_error("cannot listen on " + options_.bind + ":" + std::to_string(options_.port) +
+                             ": " + ec.message());
+  port_ = acceptor_.local_endpoint().port();
+  do_accept();
+}
+
+Server::~Server() {
+  stop();
+  workers_.join();
+}
+
+void Server::do_accept() {
+  acceptor_.async_accept(boost::asio::make_strand(io_), [this](boost::system::error_code ec, tcp::socket socket) {
+    if (ec) {
+      if (ec != boost::asio::error::operation_aborted) spdlog::warn("accept: {}", ec.message());
+      if (!acceptor_.is_open()) return;
+    } else {
+      std::make_shared<HttpSession>(std::move(socket), api_, workers_, options_.max_upload_mb << 20)->run();
+    }
+    do_accept();
+  });
+}
+
+void Server::run(bool handle_signals) {
+  std::unique_ptr<boost::asio::signal_set> signals;
+  if (handle_signals) {
+    signals = std::make_unique<boost::asio::signal_set>(io_, SIGINT, SIGTERM);
+    signals->async_wait([this](boost::system::error_code, int sig) {
+      spdlog::info("signal {}: stopping", sig);
+      stop();
+    });
+  }
+  std::vector<std::thread> threads;
+  for (int i = 1; i < options_.io_threads; ++i) threads.emplace_back([this] { io_.run(); });
+  io_.run();
+  for (auto& t : threads) t.join();
+}
+
+void Server::stop() {
+  boost::asio::post(io_, [this] {
+    boost::system::error_code ec;
+    acceptor_.close(ec);
+    io_.stop();
+  });
+}
+
+}  // namespace scatter::server

@@ -1,0 +1,94 @@
+#include "server/api.hpp"
+
+#include <gtest/gtest.h>
+
+#include "../test_util.hpp"
+
+namespace scatter::server {
+namespace {
+
+class ApiTest : public ::testing::Test {
+ protected:
+  ApiTest() : queue_(gpu::GpuOptions{}), api_(options(""), queue_, metrics_) {}
+  static ApiOptions options(const std::string& token) {
+    ApiOptions o;
+    o.token = token;
+    o.scenes_dir = test::source_path("scenes");
+    o.max_image = 512;
+    return o;
+  }
+  HttpResponse call(const std::string& method, const std::string& target, const std::string& body = "") {
+    return api_.handle({method, target, body, ""});
+  }
+  static nlohmann::json json(const HttpResponse& r) { return nlohmann::json::parse(r.body); }
+
+  RenderQueue queue_;
+  Metrics metrics_;
+  Api api_;
+};
+
+TEST_F(ApiTest, HealthAndPipelines) {
+  HttpResponse r = call("GET", "/api/health");
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(json(r)["status"], "ok");
+  EXPECT_EQ(json(call("GET", "/api/pipelines"))["pipelines"].size(), pipeline_names().size());
+}
+
+TEST_F(ApiTest, UnknownRoutesMethodsAndBodiesAreClearErrors) {
+  HttpResponse r = call("GET", "/api/nothing");
+  EXPECT_EQ(r.status, 404);
+  EXPECT_EQ(json(r)["error"], "no such resource: /api/nothing");
+  EXPECT_EQ(call("POST", "/api/health").status, 405);
+  r = call("POST", "/api/render", "{not json");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(json(r)["field"], "body");
+  r = call("POST", "/api/render", R"({"scene_name": "sphere", "pipeline": "magic"})");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(json(r)["field"], "pipeline");
+  r = call("POST", "/api/render", R"({"scene_name": "../etc/passwd"})");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(json(r)["field"], "scene_name");
+  r = call("POST", "/api/render", R"({"scene": {"mesh": {"file": "/etc/passwd"}, "medium": {}, "lights": []}})");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(json(r)["field"], "scene.mesh.file");
+  r = call("POST", "/api/render", R"({"scene_name": "sphere", "colour": 1})");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(json(r)["field"], "colour");
+  nlohmann::json big = {{"scene", test::minimal_scene()}};
+  big["scene"]["image"] = {{"width", 4096}, {"height", 64}};
+  r = call("POST", "/api/render", big.dump());
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(json(r)["field"], "scene.image.width");
+}
+
+TEST_F(ApiTest, TokenIsRequiredWhenSet) {
+  Api guarded(options("s3cret"), queue_, metrics_);
+  EXPECT_EQ(guarded.handle({"GET", "/api/health", "", ""}).status, 401);
+  EXPECT_EQ(guarded.handle({"GET", "/api/health", "", "Bearer wrong"}).status, 401);
+  EXPECT_EQ(guarded.handle({"GET", "/api/health", "", "Bearer s3cret"}).status, 200);
+}
+
+TEST_F(ApiTest, RendersImagesWithPlanAndTimings) {
+  nlohmann::json req = {{"scene", test::minimal_scene()}, {"pipeline", "surface"}, {"format", "png"}};
+  HttpResponse r = call("POST", "/api/render", req.dump());
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.content_type, "image/png");
+  EXPECT_EQ(r.body.substr(1, 3), "PNG");
+  bool has_plan = false;
+  for (const auto& [k, v] : r.headers)
+    if (k == "X-Scatter-Plan") has_plan = nlohmann::json::parse(v)["pipeline"] == "surface";
+  EXPECT_TRUE(has_plan);
+
+  req = {{"scene_name", "sphere"}, {"pipeline", "auto"}, {"terms", "single"}, {"format", "json"}};
+  r = call("POST", "/api/render", req.dump());
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(json(r)["pipeline"], "auto -> thickness");
+  EXPECT_TRUE(json(r)["timings_ms"].contains("integrate"));
+
+  std::string metrics = call("GET", "/metrics").body;
+  EXPECT_NE(metrics.find("scatter_frame_seconds_count{pipeline=\"auto\"} 1"), std::string::npos) << metrics;
+  EXPECT_NE(metrics.find("scatter_http_requests_total{route=\"/api/render\",status=\"200\"} 2"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace scatter::server
