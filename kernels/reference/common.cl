@@ -35,6 +35,20 @@ typedef struct {
   int brick, bx, by, bz;
 } Grid;
 
+Grid make_grid(float3 origin, float voxel, int nx, int ny, int nz, int brick, int bx, int by, int bz) {
+  Grid g;
+  g.origin = origin;
+  g.voxel = voxel;
+  g.nx = nx;
+  g.ny = ny;
+  g.nz = nz;
+  g.brick = brick;
+  g.bx = bx;
+  g.by = by;
+  g.bz = bz;
+  return g;
+}
+
 int voxel_index(const Grid* g, int i, int j, int k) { return (k * g->ny + j) * g->nx + i; }
 
 // sigma of `channel` at voxel (i, j, k); zero outside the grid.
@@ -236,16 +250,22 @@ float channel_of(float3 v, int c) { return c == 0 ? v.x : (c == 1 ? v.y : v.z); 
 
 // ---- Tracking in the voxel medium with per-brick majorants -----------------------------------
 
-// Delta tracking: the first real collision along o + t d, t < tmax, for `channel`. Empty bricks
-// are stepped over; within a brick, tentative collisions are drawn with the brick's majorant.
-bool delta_track(const Grid* g, __global const float* sigma_t, __global const float* majorant,
-                 int channel, float3 o, float3 d, float tmax, Rng* r, float* t_hit) {
+// Starts a walk over the bricks crossed by o + t d, t < tmax; false if the ray misses the grid.
+bool brick_walk(const Grid* g, float3 o, float3 d, float tmax, Dda* s) {
   float g0, g1;
   if (!grid_interval(g, o, d, &g0, &g1)) return false;
   g1 = fmin(g1, tmax);
   if (g1 <= g0) return false;
+  dda_init(s, o, d, g->origin, g->voxel * g->brick, (int3)(g->bx, g->by, g->bz), g0, g1);
+  return true;
+}
+
+// Delta tracking: the first real collision along o + t d, t < tmax, for `channel`. Empty bricks
+// are stepped over; within a brick, tentative collisions are drawn with the brick's majorant.
+bool delta_track(const Grid* g, __global const float* sigma_t, __global const float* majorant,
+                 int channel, float3 o, float3 d, float tmax, Rng* r, float* t_hit) {
   Dda s;
-  dda_init(&s, o, d, g->origin, g->voxel * g->brick, (int3)(g->bx, g->by, g->bz), g0, g1);
+  if (!brick_walk(g, o, d, tmax, &s)) return false;
   float a, b;
   int3 c;
   while (dda_next(&s, &a, &b, &c)) {
@@ -269,12 +289,8 @@ bool delta_track(const Grid* g, __global const float* sigma_t, __global const fl
 // Russian roulette once it is small so dense media end early.
 float ratio_track(const Grid* g, __global const float* sigma_t, __global const float* majorant,
                   int channel, float3 o, float3 d, float tmax, Rng* r) {
-  float g0, g1;
-  if (!grid_interval(g, o, d, &g0, &g1)) return 1.0f;
-  g1 = fmin(g1, tmax);
-  if (g1 <= g0) return 1.0f;
   Dda s;
-  dda_init(&s, o, d, g->origin, g->voxel * g->brick, (int3)(g->bx, g->by, g->bz), g0, g1);
+  if (!brick_walk(g, o, d, tmax, &s)) return 1.0f;
   float tr = 1.0f, a, b;
   int3 c;
   while (dda_next(&s, &a, &b, &c)) {

@@ -39,16 +39,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
                          __global float* sum_sq) {
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
-  Grid g;
-  g.origin = origin;
-  g.voxel = voxel;
-  g.nx = nx;
-  g.ny = ny;
-  g.nz = nz;
-  g.brick = brick;
-  g.bx = bx;
-  g.by = by;
-  g.bz = bz;
+  Grid g = make_grid(origin, voxel, nx, ny, nz, brick, bx, by, bz);
   Bvh bvh = {bvh_bounds, bvh_links, bvh_tris};
   const bool dielectric = ior != 1.0f;
   Cam cam = load_camera(camera);

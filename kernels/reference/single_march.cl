@@ -68,12 +68,7 @@ __kernel void single_march(float3 origin, float voxel, int nx, int ny, int nz,
                            __global float* out) {
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
-  Grid g;
-  g.origin = origin;
-  g.voxel = voxel;
-  g.nx = nx;
-  g.ny = ny;
-  g.nz = nz;
+  Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);  // no bricks: the marcher walks voxels
   Bvh bvh = {bvh_bounds, bvh_links, bvh_tris};
   Cam cam = load_camera(camera);
   float3 d0 = camera_ray(cam, x, y, width, height, 0.5f, 0.5f);
