@@ -121,10 +121,8 @@ Scene parse_scene(const nlohmann::json& json, const std::filesystem::path& base_
   Scene scene;
   parse_mesh(root.object("mesh"), base_dir, scene);
   scene.medium = parse_medium(root.object("medium"), base_dir);
-  const auto& lights = root.array("lights", 0, static_cast<size_t>(limits.max_lights));
-  for (size_t i = 0; i < lights.size(); ++i)
-    scene.lights.push_back(parse_light(JsonObject(lights[i], root.path("lights") + "[" +
-                                                                 std::to_string(i) + "]")));
+  scene.lights = parse_lights(root.array("lights", 0, static_cast<size_t>(limits.max_lights)),
+                              root.path("lights"), limits);
   if (auto cam = root.optional_object("camera")) scene.camera = parse_camera(*cam);
   if (auto img = root.optional_object("image")) {
     Range side{1, double(limits.max_image)};
@@ -137,6 +135,17 @@ Scene parse_scene(const nlohmann::json& json, const std::filesystem::path& base_
   if (auto s = root.optional_object("surface")) scene.surface = parse_surface(*s);
   root.finish();
   return scene;
+}
+
+std::vector<Light> parse_lights(const nlohmann::json& lights, const std::string& path,
+                                const SceneLimits& limits) {
+  if (!lights.is_array() || lights.size() > static_cast<size_t>(limits.max_lights))
+    throw ValidationError(path, "must be an array of at most " + std::to_string(limits.max_lights) +
+                                    " lights");
+  std::vector<Light> out;
+  for (size_t i = 0; i < lights.size(); ++i)
+    out.push_back(parse_light(JsonObject(lights[i], path + "[" + std::to_string(i) + "]")));
+  return out;
 }
 
 Scene load_scene(const std::filesystem::path& path, const SceneLimits& limits) {

@@ -69,6 +69,9 @@ struct Scene {
 // Throws ValidationError naming the first bad field, std::runtime_error for unreadable files.
 Scene parse_scene(const nlohmann::json& json, const std::filesystem::path& base_dir,
                   const SceneLimits& limits = {});
+// Validates an array of light objects (as in a scene's "lights"); `path` names it in errors.
+std::vector<Light> parse_lights(const nlohmann::json& lights, const std::string& path,
+                                const SceneLimits& limits = {});
 // Reads and parses a scene file.
 Scene load_scene(const std::filesystem::path& path, const SceneLimits& limits = {});
 

@@ -64,7 +64,7 @@ HttpResponse Api::handle(const HttpRequest& request) {
 
 HttpResponse Api::route(const HttpRequest& request, std::string& route_name) {
   std::string path = request.target.substr(0, request.target.find('?'));
-  if (!options_.token.empty() && request.authorization != "Bearer " + options_.token) {
+  if (!authorized(request)) {
     route_name = "unauthorized";
     return error(401, "this server needs a token: send \"Authorization: Bearer TOKEN\"");
   }
@@ -84,6 +84,14 @@ HttpResponse Api::route(const HttpRequest& request, std::string& route_name) {
   }
   route_name = "not_found";
   return error(404, "no such resource: " + path);
+}
+
+bool Api::authorized(const HttpRequest& request) const {
+  if (options_.token.empty() || request.authorization == "Bearer " + options_.token) return true;
+  auto q = request.target.find('?');
+  if (q == std::string::npos) return false;
+  std::string query = "&" + request.target.substr(q + 1) + "&";
+  return query.find("&token=" + options_.token + "&") != std::string::npos;
 }
 
 HttpResponse Api::health() {
@@ -112,54 +120,67 @@ HttpResponse Api::devices() {
   return json_response(info.get());
 }
 
-HttpResponse Api::render(const std::string& body) {
-  nlohmann::json request = nlohmann::json::parse(body, nullptr, false);
-  if (request.is_discarded()) throw ValidationError("body", "is not valid JSON");
-  JsonObject r(request, "");
-  std::string pipeline = r.string("pipeline", "auto");
-  std::string terms_name = r.string("terms", "");
-  std::string format = r.choice("format", {"png", "jpg", "exr", "json"}, "png");
-  double exposure = r.number("exposure", 1.0, {1e-6, 1e6});
-  Settings settings;
+Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& request,
+                                      const ApiOptions& options) {
+  RenderSpec spec;
+  spec.pipeline = r.string("pipeline", "auto");
+  spec.terms = r.string("terms", "");
+  spec.format = r.choice("format", {"png", "jpg", "exr", "json"}, "png");
+  spec.exposure = r.number("exposure", 1.0, {1e-6, 1e6});
   if (auto s = r.optional_object("settings")) {
-    for (const auto& [key, value] : request["settings"].items()) settings[key] = s->number(key, std::nullopt, {-1e9, 1e9});
+    for (const auto& [key, value] : request["settings"].items())
+      spec.settings[key] = s->number(key, std::nullopt, {-1e9, 1e9});
     s->finish();
   }
   if (r.has("scene") == r.has("scene_name"))
     throw ValidationError("scene", "give exactly one of \"scene\" or \"scene_name\"");
   SceneLimits limits;
-  limits.max_image = options_.max_image;
-  Scene scene;
+  limits.max_image = options.max_image;
   if (r.has("scene_name")) {
     std::string name = r.string("scene_name", std::nullopt);
     if (name.empty() || name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_") != std::string::npos)
       throw ValidationError("scene_name", "must be the name of a shipped scene (letters, digits, - and _)");
-    auto file = options_.scenes_dir / (name + ".json");
+    auto file = options.scenes_dir / (name + ".json");
     if (!std::filesystem::exists(file)) throw ValidationError("scene_name", "no scene named \"" + name + "\"");
-    scene = load_scene(file, limits);
+    spec.scene = load_scene(file, limits);
   } else {
     check_file_fields(request["scene"], "scene");
     r.object("scene");  // marks it read; parse_scene validates it
-    scene = parse_scene(request["scene"], options_.scenes_dir, limits);
+    spec.scene = parse_scene(request["scene"], options.scenes_dir, limits);
   }
-  r.finish();
+  return spec;
+}
 
-  auto job = queue_.submit([&](RenderQueue::Context& c) {
+RenderResult Api::render_on_queue(RenderQueue& queue, Metrics& metrics, const Scene& scene,
+                                  const std::string& pipeline, const std::string& terms,
+                                  const Settings& settings) {
+  auto job = queue.submit([&](RenderQueue::Context& c) {
     Pipeline& p = c.pipeline(pipeline);
     RenderRequest req;
     req.settings = settings;
     auto ok = p.supported_terms();
-    req.terms = !terms_name.empty() ? parse_terms(terms_name)
+    req.terms = !terms.empty() ? parse_terms(terms)
                 : std::find(ok.begin(), ok.end(), Terms::All) != ok.end() ? Terms::All : ok.front();
     auto start = std::chrono::steady_clock::now();
     RenderResult result = p.render(scene, req);
     double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::vector<std::pair<std::string, double>> stages;
     for (const auto& t : result.timings) stages.emplace_back(t.stage, t.ms / 1000);
-    metrics_.observe_render(p.name(), seconds, stages);
+    metrics.observe_render(p.name(), seconds, stages);
     return result;
   });
-  RenderResult result = job.get();
+  return job.get();
+}
+
+HttpResponse Api::render(const std::string& body) {
+  nlohmann::json request = nlohmann::json::parse(body, nullptr, false);
+  if (request.is_discarded()) throw ValidationError("body", "is not valid JSON");
+  JsonObject r(request, "");
+  RenderSpec spec = read_render_spec(r, request, options_);
+  r.finish();
+  RenderResult result = render_on_queue(queue_, metrics_, spec.scene, spec.pipeline, spec.terms, spec.settings);
+  const std::string& format = spec.format;
+  const double exposure = spec.exposure;
 
   nlohmann::json timings = nlohmann::json::object();
   for (const auto& t : result.timings) timings[t.stage] = t.ms;

@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "protocol/json_reader.hpp"
+#include "scene/scene.hpp"
 #include "server/metrics.hpp"
 #include "server/render_queue.hpp"
 
@@ -26,6 +28,7 @@ struct ApiOptions {
   std::string token;                 // when set, every request needs "Authorization: Bearer TOKEN"
   std::filesystem::path scenes_dir;  // where scene_name and relative mesh files are looked up
   int max_image = 2048;              // pixels per side for a render request
+  size_t max_message_bytes = 64 << 20;  // largest WebSocket message
 };
 
 struct HttpRequest {
@@ -46,8 +49,30 @@ class Api {
  public:
   Api(ApiOptions options, RenderQueue& queue, Metrics& metrics);
   HttpResponse handle(const HttpRequest& request);
+  // Whether the request carries the token (header "Authorization: Bearer T", or "?token=T" for
+  // WebSocket clients, which cannot set headers); true when no token is set.
+  bool authorized(const HttpRequest& request) const;
+
+  RenderQueue& queue() { return queue_; }
+  Metrics& metrics() { return metrics_; }
+  const ApiOptions& options() const { return options_; }
 
   static HttpResponse error(int status, const std::string& message, const std::string& field = "");
+
+  // What a render request asks for; shared by POST /api/render and WebSocket hello messages.
+  struct RenderSpec {
+    Scene scene;
+    std::string pipeline = "auto", terms, format = "png";
+    Settings settings;
+    double exposure = 1.0;
+  };
+  // Reads the fields of `r` (an object over `json`): scene or scene_name, pipeline, terms, format,
+  // settings, exposure. Leaves other fields for the caller; throws ValidationError.
+  static RenderSpec read_render_spec(JsonObject& r, const nlohmann::json& json, const ApiOptions& options);
+  // Renders on the render thread and records the metrics; waits for the result.
+  static RenderResult render_on_queue(RenderQueue& queue, Metrics& metrics, const Scene& scene,
+                                      const std::string& pipeline, const std::string& terms,
+                                      const Settings& settings);
 
  private:
   HttpResponse route(const HttpRequest& request, std::string& route_name);

@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include "server/ws_session.hpp"
+
 namespace scatter::server {
 namespace {
 
@@ -51,6 +53,17 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
   }
   if (ec) return fail(ec, "read");
   auto req = parser_->release();
+  if (beast::websocket::is_upgrade(req)) {
+    std::string target(req.target());
+    HttpRequest probe{"GET", target, "", std::string(req[http::field::authorization])};
+    if (target.substr(0, target.find('?')) == "/api/ws" && api_.authorized(probe)) {
+      api_.metrics().count_request("/api/ws", 101);
+      std::make_shared<WsSession>(stream_.release_socket(), api_.queue(), api_.metrics(), workers_,
+                                  api_.options())
+          ->run(std::move(req));
+      return;
+    }
+  }
   HttpRequest request{std::string(req.method_string()), std::string(req.target()), req.body(),
                       std::string(req[http::field::authorization])};
   unsigned version = req.version();

@@ -9,7 +9,11 @@ namespace scatter::server {
 Server::Server(ServerOptions options)
     : options_(std::move(options)),
       queue_(options_.gpu),
-      api_(options_.api, queue_, metrics_),
+      api_([&] {
+        ApiOptions a = options_.api;
+        a.max_message_bytes = options_.max_upload_mb << 20;
+        return a;
+      }(), queue_, metrics_),
       workers_(static_cast<size_t>(std::max(1, options_.workers))),
       acceptor_(io_) {
   boost::system::error_code ec;

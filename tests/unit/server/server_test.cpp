@@ -92,3 +92,116 @@ TEST_F(ServerTest, ConcurrentClientsAllGetAnswers) {
 
 }  // namespace
 }  // namespace scatter::server
+
+namespace scatter::server {
+namespace {
+
+namespace websocket = boost::beast::websocket;
+
+// A scripted WebSocket client.
+class WsClient {
+ public:
+  explicit WsClient(unsigned short port) : ws_(io_) {
+    auto ep = boost::asio::ip::tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port);
+    boost::beast::get_lowest_layer(ws_).connect(ep);
+    ws_.handshake("127.0.0.1", "/api/ws");
+  }
+  void send(const nlohmann::json& j) { ws_.write(boost::asio::buffer(j.dump())); }
+  // The next message: JSON text, or binary (returned with binary = true).
+  std::string next(bool& binary) {
+    boost::beast::flat_buffer b;
+    ws_.read(b);
+    binary = ws_.got_binary();
+    return boost::beast::buffers_to_string(b.data());
+  }
+  nlohmann::json next_json() {
+    bool binary = true;
+    std::string s = next(binary);
+    EXPECT_FALSE(binary);
+    return nlohmann::json::parse(s);
+  }
+  // Reads a frame header and its image; returns the header.
+  nlohmann::json next_frame(std::string& image) {
+    nlohmann::json h = next_json();
+    if (h["type"] != "frame") return h;
+    bool binary = false;
+    image = next(binary);
+    EXPECT_TRUE(binary);
+    return h;
+  }
+  void close() { ws_.close(websocket::close_code::normal); }
+
+ private:
+  boost::asio::io_context io_;
+  websocket::stream<boost::beast::tcp_stream> ws_;
+};
+
+nlohmann::json hello() {
+  nlohmann::json scene = test::minimal_scene();
+  return {{"type", "hello"}, {"scene", scene}, {"pipeline", "surface"}, {"format", "png"}};
+}
+
+nlohmann::json pose(int revision) {
+  double a = revision * 0.01;
+  return {{"type", "camera"}, {"position", {4 * std::sin(a), 0.5, 4 * std::cos(a)}},
+          {"target", {0, 0, 0}}, {"revision", revision}};
+}
+
+TEST_F(ServerTest, WebSocketStreamsFramesAndTheLatestPoseWins) {
+  WsClient c(server_->port());
+  c.send(hello());
+  std::string image;
+  nlohmann::json h = c.next_frame(image);
+  ASSERT_EQ(h["type"], "frame") << h.dump();
+  EXPECT_EQ(h["width"], 64);
+  EXPECT_EQ(image.substr(1, 3), "PNG");
+  // A burst of 100 poses while the first frame is still unacknowledged: only the newest counts.
+  for (int r = 1; r <= 100; ++r) c.send(pose(r));
+  c.send({{"type", "ack"}, {"frame", h["frame"]}});
+  int frames = 0;
+  long long last = 0;
+  while (last < 100 && frames < 100) {
+    h = c.next_frame(image);
+    ASSERT_EQ(h["type"], "frame") << h.dump();
+    last = h["camera_revision"];
+    ++frames;
+    c.send({{"type", "ack"}, {"frame", h["frame"]}});
+  }
+  EXPECT_EQ(last, 100);
+  EXPECT_LE(frames, 3);  // far fewer frames than poses
+  c.close();
+}
+
+TEST_F(ServerTest, WebSocketBadMessagesGetErrorsAndTheConnectionStays) {
+  WsClient c(server_->port());
+  c.send(nlohmann::json{{"type", "camera"}, {"position", {0, 0, 1}}});
+  nlohmann::json e = c.next_json();
+  EXPECT_EQ(e["type"], "error");
+  EXPECT_EQ(e["error"], "type: send hello first");
+  c.send(nlohmann::json{{"type", "dance"}});
+  EXPECT_EQ(c.next_json()["field"], "type");
+  nlohmann::json bad = hello();
+  bad["scene"]["voxels"] = 4096;
+  c.send(bad);
+  EXPECT_EQ(c.next_json()["field"], "scene.voxels");
+  c.send(hello());  // still usable
+  std::string image;
+  EXPECT_EQ(c.next_frame(image)["type"], "frame");
+  c.close();
+}
+
+TEST_F(ServerTest, AClientVanishingMidFrameCostsNothing) {
+  {
+    WsClient c(server_->port());
+    c.send(hello());
+  }  // gone before its frame is sent
+  WsClient d(server_->port());
+  d.send(hello());
+  std::string image;
+  EXPECT_EQ(d.next_frame(image)["type"], "frame");
+  d.close();
+  EXPECT_EQ(request(server_->port(), http::verb::get, "/api/health").result_int(), 200);
+}
+
+}  // namespace
+}  // namespace scatter::server

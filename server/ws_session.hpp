@@ -1,0 +1,62 @@
+// A live session over WebSocket (/api/ws). The client sends JSON messages; the server answers with
+// a JSON frame header followed by the encoded frame as a binary message.
+//
+//   {"type": "hello", "scene_name": "bunny" | "scene": {...}, "pipeline": "surface",
+//    "terms": "...", "format": "jpg" | "png", "settings": {...}}
+//   {"type": "camera", "position": [..], "target": [..], "up": [..], "fov_deg": 40, "revision": n}
+//   {"type": "lights", "lights": [...], "revision": n}
+//   {"type": "ack", "frame": id}
+//
+// Latest wins: camera and light messages only replace the session's state; a frame renders the
+// newest state when it starts, so stale poses are never rendered. At most one frame is in flight
+// until the client acks it. Each session has at most one job on the render thread's FIFO queue, so
+// sessions take turns. A bad message gets {"type": "error", "error", "field"}; the connection stays.
+#pragma once
+
+#include <boost/asio.hpp>
+#include <boost/beast.hpp>
+#include <boost/beast/websocket.hpp>
+#include <deque>
+#include <memory>
+#include <optional>
+
+#include "scene/scene.hpp"
+#include "server/api.hpp"
+
+namespace scatter::server {
+
+class WsSession : public std::enable_shared_from_this<WsSession> {
+ public:
+  WsSession(boost::asio::ip::tcp::socket&& socket, RenderQueue& queue, Metrics& metrics,
+            boost::asio::thread_pool& workers, const ApiOptions& options);
+  void run(boost::beast::http::request<boost::beast::http::string_body> upgrade);
+
+ private:
+  void do_read();
+  void on_read(boost::beast::error_code ec, size_t bytes);
+  void handle(const std::string& text);
+  void maybe_render();
+  void send(std::string message, bool binary);
+  void do_write();
+  void send_error(const std::string& error, const std::string& field);
+
+  boost::beast::websocket::stream<boost::beast::tcp_stream> ws_;
+  boost::beast::flat_buffer buffer_;
+  RenderQueue& queue_;
+  Metrics& metrics_;
+  boost::asio::thread_pool& workers_;
+  const ApiOptions& options_;
+
+  // Session state; touched only on the session's strand.
+  std::shared_ptr<const Scene> scene_;  // as loaded; the camera and lights below override it
+  Camera camera_;
+  std::vector<Light> lights_;
+  std::string pipeline_ = "surface", terms_, format_ = "jpg";
+  Settings settings_;
+  long long camera_revision_ = 0, light_revision_ = 0;
+  bool dirty_ = false, in_flight_ = false, closed_ = false;
+  long long next_frame_ = 1;
+  std::deque<std::pair<std::shared_ptr<const std::string>, bool>> writes_;
+};
+
+}  // namespace scatter::server
