@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <map>
 
+#include "gpu/embedded_sources.hpp"
 #include "gpu/error.hpp"
 #include "protocol/json_reader.hpp"
 #include "scene/scene.hpp"
@@ -81,6 +82,16 @@ HttpResponse Api::route(const HttpRequest& request, std::string& route_name) {
     if (path == "/api/devices") return devices();
     if (path == "/api/render") return render(request.body);
     return {200, "text/plain; version=0.0.4", metrics_.text(queue_.depth()), {}};
+  }
+  // The browser client (web/), compiled into the binary.
+  static const std::map<std::string, std::pair<std::string, std::string>> kStatic = {
+      {"/", {"web/index.html", "text/html; charset=utf-8"}},
+      {"/index.html", {"web/index.html", "text/html; charset=utf-8"}},
+      {"/app.js", {"web/app.js", "text/javascript; charset=utf-8"}},
+      {"/style.css", {"web/style.css", "text/css; charset=utf-8"}}};
+  if (auto s = kStatic.find(path); s != kStatic.end() && request.method == "GET") {
+    route_name = "static";
+    return {200, s->second.second, std::string(gpu::embedded_source(s->second.first)), {}};
   }
   route_name = "not_found";
   return error(404, "no such resource: " + path);

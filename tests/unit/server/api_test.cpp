@@ -61,6 +61,14 @@ TEST_F(ApiTest, UnknownRoutesMethodsAndBodiesAreClearErrors) {
   EXPECT_EQ(json(r)["field"], "scene.image.width");
 }
 
+TEST_F(ApiTest, ServesTheWebClient) {
+  HttpResponse r = call("GET", "/");
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(r.content_type, "text/html; charset=utf-8");
+  EXPECT_NE(r.body.find("<canvas id=\"view\""), std::string::npos);
+  EXPECT_NE(call("GET", "/app.js").body.find("/api/ws"), std::string::npos);
+}
+
 TEST_F(ApiTest, TokenIsRequiredWhenSet) {
   Api guarded(options("s3cret"), queue_, metrics_);
   EXPECT_EQ(guarded.handle({"GET", "/api/health", "", ""}).status, 401);

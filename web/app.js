@@ -1,0 +1,107 @@
+// Thin client: draws the frames the daemon streams over /api/ws and sends camera and light
+// changes. The server keeps only the newest state (latest wins); this page acks each frame it drew.
+'use strict';
+
+const canvas = document.getElementById('view');
+const ctx = canvas.getContext('2d');
+const $ = (id) => document.getElementById(id);
+const state = {
+  ws: null, frames: 0, header: null, sentAt: 0, fpsFrames: 0, fpsSince: performance.now(),
+  orbit: { yaw: 0, pitch: 0.05, radius: 3.6 }, light: [2, 3, 3], revision: 0, lightRevision: 0,
+};
+
+function cameraMessage() {
+  const o = state.orbit;
+  const position = [o.radius * Math.sin(o.yaw) * Math.cos(o.pitch), o.radius * Math.sin(o.pitch),
+                    o.radius * Math.cos(o.yaw) * Math.cos(o.pitch)];
+  return { type: 'camera', position, target: [0, 0, 0], up: [0, 1, 0], revision: ++state.revision };
+}
+
+function lightsMessage() {
+  const hex = $('light-color').value;
+  const color = [1, 3, 5].map((i) => parseInt(hex.substr(i, 2), 16) / 255);
+  return { type: 'lights', revision: ++state.lightRevision,
+           lights: [{ type: 'point', position: state.light, color, intensity: Number($('light-intensity').value) }] };
+}
+
+function send(msg, timed = true) {
+  if (state.ws && state.ws.readyState === WebSocket.OPEN) {
+    if (timed) state.sentAt = performance.now();  // round trip: from a change to its frame
+    state.ws.send(JSON.stringify(msg));
+  }
+}
+
+function hello() {
+  send({ type: 'hello', scene_name: $('scene').value, pipeline: $('pipeline').value, format: 'jpg',
+         terms: $('pipeline').value === 'surface' ? 'surface' : 'single' });
+}
+
+function connect() {
+  const token = new URLSearchParams(location.search).get('token');
+  const url = `ws://${location.host}/api/ws${token ? '?token=' + encodeURIComponent(token) : ''}`;
+  const ws = new WebSocket(url);
+  ws.binaryType = 'blob';
+  state.ws = ws;
+  ws.onopen = () => { $('status').textContent = 'connected'; hello(); };
+  ws.onclose = () => {  // the server restarted or went away: try again
+    $('status').textContent = 'reconnecting';
+    setTimeout(connect, 1000);
+  };
+  ws.onmessage = async (event) => {
+    if (typeof event.data === 'string') {
+      const msg = JSON.parse(event.data);
+      if (msg.type === 'error') $('status').textContent = 'error: ' + msg.error;
+      else state.header = msg;
+      return;
+    }
+    const header = state.header;
+    const bitmap = await createImageBitmap(event.data);
+    canvas.width = bitmap.width;
+    canvas.height = bitmap.height;
+    ctx.drawImage(bitmap, 0, 0);
+    state.frames += 1;
+    state.fpsFrames += 1;
+    $('frames').textContent = state.frames;
+    $('rtt').textContent = (performance.now() - state.sentAt).toFixed(0);
+    $('stages').textContent = header ? `${header.pipeline}: ` + Object.entries(header.timings_ms)
+      .map(([k, v]) => `${k} ${v.toFixed(1)}`).join(' · ') + ' ms' : '';
+    $('status').textContent = 'connected';
+    canvas.dataset.frames = String(state.frames);
+    canvas.dataset.revision = header ? String(header.camera_revision) : '0';
+    send({ type: 'ack', frame: header ? header.frame : 0 }, false);
+  };
+}
+
+setInterval(() => {
+  const now = performance.now();
+  $('fps').textContent = (state.fpsFrames * 1000 / (now - state.fpsSince)).toFixed(1);
+  state.fpsFrames = 0;
+  state.fpsSince = now;
+}, 1000);
+
+let drag = null;
+canvas.addEventListener('pointerdown', (e) => { drag = { x: e.clientX, y: e.clientY }; canvas.setPointerCapture(e.pointerId); });
+canvas.addEventListener('pointerup', () => { drag = null; });
+canvas.addEventListener('pointermove', (e) => {
+  if (!drag) return;
+  const dx = (e.clientX - drag.x) * 0.01, dy = (e.clientY - drag.y) * 0.01;
+  drag = { x: e.clientX, y: e.clientY };
+  if (e.shiftKey) {
+    state.light = [state.light[0] + dx * 3, state.light[1] - dy * 3, state.light[2]];
+    send(lightsMessage());
+  } else {
+    state.orbit.yaw -= dx;
+    state.orbit.pitch = Math.max(-1.4, Math.min(1.4, state.orbit.pitch + dy));
+    send(cameraMessage());
+  }
+});
+canvas.addEventListener('wheel', (e) => {
+  e.preventDefault();
+  state.orbit.radius = Math.max(1.2, Math.min(20, state.orbit.radius * Math.exp(e.deltaY * 0.001)));
+  send(cameraMessage());
+}, { passive: false });
+$('scene').addEventListener('change', hello);
+$('pipeline').addEventListener('change', hello);
+$('light-color').addEventListener('input', () => send(lightsMessage()));
+$('light-intensity').addEventListener('input', () => send(lightsMessage()));
+connect();
