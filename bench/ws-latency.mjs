@@ -1,0 +1,41 @@
+// Latency from a camera pose sent to its frame received, minus the server's render time (the
+// server overhead: queueing, encoding, transport), over a WebSocket session.
+// Usage: node --experimental-websocket bench/ws-latency.mjs URL [POSES] [SCENE] [PIPELINE]   e.g. ws://127.0.0.1:8080/api/ws
+// Needs a global WebSocket: Node 22+, or Node 20 with --experimental-websocket.
+const [url, posesArg = '60', scene = 'bunny', pipeline = 'surface'] = process.argv.slice(2);
+const poses = Number(posesArg);
+if (typeof WebSocket === 'undefined') {
+  console.error('this script needs a global WebSocket: Node 22+, or node --experimental-websocket');
+  process.exit(2);
+}
+const ws = new WebSocket(url);
+ws.binaryType = 'arraybuffer';
+let header = null, revision = 0, sentAt = 0;
+const latency = [], overhead = [], render = [];
+const pose = (r) => ({ type: 'camera', position: [3.6 * Math.sin(r * 0.05), 0.2, 3.6 * Math.cos(r * 0.05)],
+                       target: [0, 0, 0], revision: r });
+ws.onopen = () => ws.send(JSON.stringify({ type: 'hello', scene_name: scene, pipeline, format: 'jpg' }));
+ws.onmessage = (e) => {
+  if (typeof e.data === 'string') { header = JSON.parse(e.data); return; }
+  const now = performance.now();
+  ws.send(JSON.stringify({ type: 'ack', frame: header.frame }));
+  if (revision > 0 && header.camera_revision === revision) {
+    const ms = Object.values(header.timings_ms).reduce((a, b) => a + b, 0);
+    latency.push(now - sentAt);
+    render.push(ms);
+    overhead.push(now - sentAt - ms);
+  }
+  if (revision >= poses) {
+    const q = (a, p) => { const s = [...a].sort((x, y) => x - y); return s[Math.min(s.length - 1, Math.floor(p * s.length))]; };
+    const f = (a) => `p50 ${q(a, 0.5).toFixed(1)} ms, p95 ${q(a, 0.95).toFixed(1)} ms`;
+    console.log(`${latency.length} poses, ${scene}/${pipeline}, ${header.width}x${header.height}`);
+    console.log(`pose to frame:   ${f(latency)}`);
+    console.log(`render (server): ${f(render)}`);
+    console.log(`server overhead: ${f(overhead)}`);
+    ws.close();
+    return;
+  }
+  revision += 1;
+  sentAt = performance.now();
+  ws.send(JSON.stringify(pose(revision)));
+};
