@@ -81,7 +81,11 @@ HttpResponse Api::route(const HttpRequest& request, std::string& route_name) {
     if (path == "/api/pipelines") return json_response({{"pipelines", pipeline_names()}});
     if (path == "/api/devices") return devices();
     if (path == "/api/render") return render(request.body);
-    return {200, "text/plain; version=0.0.4", metrics_.text(queue_.depth()), {}};
+    return {200, "text/plain; version=0.0.4",
+            metrics_.text(queue_.depth()) +
+                "# HELP scatter_sessions Live WebSocket sessions.\n# TYPE scatter_sessions gauge\n"
+                "scatter_sessions " + std::to_string(sessions_.load()) + "\n",
+            {}};
   }
   // The browser client (web/), compiled into the binary.
   static const std::map<std::string, std::pair<std::string, std::string>> kStatic = {
@@ -97,6 +101,15 @@ HttpResponse Api::route(const HttpRequest& request, std::string& route_name) {
   return error(404, "no such resource: " + path);
 }
 
+bool Api::acquire_session() {
+  int n = sessions_.load();
+  while (n < options_.max_sessions)
+    if (sessions_.compare_exchange_weak(n, n + 1)) return true;
+  return false;
+}
+
+void Api::release_session() { --sessions_; }
+
 bool Api::authorized(const HttpRequest& request) const {
   if (options_.token.empty() || request.authorization == "Bearer " + options_.token) return true;
   auto q = request.target.find('?');
@@ -110,7 +123,8 @@ HttpResponse Api::health() {
   return json_response({{"status", "ok"},
                         {"version", "0.1.0"},
                         {"uptime_s", uptime},
-                        {"queue_depth", queue_.depth()}});
+                        {"queue_depth", queue_.depth()},
+                        {"sessions", sessions_.load()}});
 }
 
 HttpResponse Api::devices() {

@@ -12,6 +12,7 @@
 // Errors are JSON {"error": "...", "field": "..."} with 400, 401, 404, 405, 413 or 503.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <string>
@@ -29,6 +30,8 @@ struct ApiOptions {
   std::filesystem::path scenes_dir;  // where scene_name and relative mesh files are looked up
   int max_image = 2048;              // pixels per side for a render request
   size_t max_message_bytes = 64 << 20;  // largest WebSocket message
+  int max_sessions = 16;                // live WebSocket sessions at once
+  int idle_refine_ms = 200;             // a still view is re-rendered at full size after this
 };
 
 struct HttpRequest {
@@ -52,6 +55,11 @@ class Api {
   // Whether the request carries the token (header "Authorization: Bearer T", or "?token=T" for
   // WebSocket clients, which cannot set headers); true when no token is set.
   bool authorized(const HttpRequest& request) const;
+
+  // Takes a live-session slot; false when --max-sessions are in use. release_session() gives it back.
+  bool acquire_session();
+  void release_session();
+  int sessions() const { return sessions_; }
 
   RenderQueue& queue() { return queue_; }
   Metrics& metrics() { return metrics_; }
@@ -84,6 +92,7 @@ class Api {
   RenderQueue& queue_;
   Metrics& metrics_;
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
+  std::atomic<int> sessions_{0};
 };
 
 }  // namespace scatter::server

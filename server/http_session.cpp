@@ -57,10 +57,14 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
     std::string target(req.target());
     HttpRequest probe{"GET", target, "", std::string(req[http::field::authorization])};
     if (target.substr(0, target.find('?')) == "/api/ws" && api_.authorized(probe)) {
+      if (!api_.acquire_session()) {
+        api_.metrics().count_request("/api/ws", 503);
+        HttpResponse r = Api::error(503, "all " + std::to_string(api_.options().max_sessions) +
+                                             " live sessions are in use; try again later");
+        return send(to_beast(r, req.version(), false));
+      }
       api_.metrics().count_request("/api/ws", 101);
-      std::make_shared<WsSession>(stream_.release_socket(), api_.queue(), api_.metrics(), workers_,
-                                  api_.options())
-          ->run(std::move(req));
+      std::make_shared<WsSession>(stream_.release_socket(), api_, workers_)->run(std::move(req));
       return;
     }
   }
@@ -89,10 +93,20 @@ void HttpSession::send(http::response<http::string_body>&& response) {
 void HttpSession::on_write(bool keep_alive, beast::error_code ec, size_t) {
   if (ec) return fail(ec, "write");
   if (!keep_alive) {
+    // Lingering close: stop sending, then read and drop what the client still sends (say the
+    // rest of an oversized body), so that it sees our answer instead of a reset connection.
     stream_.socket().shutdown(tcp::socket::shutdown_send, ec);
-    return;
+    stream_.expires_after(std::chrono::seconds(5));
+    return do_drain();
   }
   do_read();
+}
+
+void HttpSession::do_drain() {
+  drain_.resize(64 * 1024);
+  stream_.async_read_some(boost::asio::buffer(drain_), [self = shared_from_this()](beast::error_code ec, size_t) {
+    if (!ec) self->do_drain();
+  });
 }
 
 }  // namespace scatter::server

@@ -24,6 +24,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void on_read(beast::error_code ec, size_t bytes);
   void send(http::response<http::string_body>&& response);
   void on_write(bool keep_alive, beast::error_code ec, size_t bytes);
+  void do_drain();
 
   beast::tcp_stream stream_;
   beast::flat_buffer buffer_;
@@ -32,6 +33,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   boost::asio::thread_pool& workers_;
   size_t body_limit_;
   std::shared_ptr<http::response<http::string_body>> response_;
+  std::vector<char> drain_;
 };
 
 }  // namespace scatter::server

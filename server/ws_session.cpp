@@ -9,9 +9,16 @@ namespace scatter::server {
 namespace beast = boost::beast;
 namespace websocket = beast::websocket;
 
-WsSession::WsSession(boost::asio::ip::tcp::socket&& socket, RenderQueue& queue, Metrics& metrics,
-                     boost::asio::thread_pool& workers, const ApiOptions& options)
-    : ws_(std::move(socket)), queue_(queue), metrics_(metrics), workers_(workers), options_(options) {}
+WsSession::WsSession(boost::asio::ip::tcp::socket&& socket, Api& api, boost::asio::thread_pool& workers)
+    : ws_(std::move(socket)),
+      api_(api),
+      queue_(api.queue()),
+      metrics_(api.metrics()),
+      workers_(workers),
+      options_(api.options()),
+      refine_timer_(ws_.get_executor()) {}
+
+WsSession::~WsSession() { api_.release_session(); }
 
 void WsSession::run(beast::http::request<beast::http::string_body> upgrade) {
   ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
@@ -65,6 +72,7 @@ void WsSession::handle(const std::string& text) {
     format_ = spec.format == "json" ? "jpg" : spec.format;
     settings_ = spec.settings;
     dirty_ = true;
+    interactive_ = false;
   } else if (type == "camera") {
     if (!scene_) throw ValidationError("type", "send hello first");
     Camera c = camera_;
@@ -80,6 +88,8 @@ void WsSession::handle(const std::string& text) {
     camera_ = c;
     camera_revision_ = rev;
     dirty_ = true;
+    interactive_ = true;
+    last_change_ = std::chrono::steady_clock::now();
   } else if (type == "lights") {
     if (!scene_) throw ValidationError("type", "send hello first");
     long long rev = static_cast<long long>(m.number("revision", double(light_revision_ + 1), {0, 9e15}));
@@ -88,12 +98,32 @@ void WsSession::handle(const std::string& text) {
     lights_ = parse_lights(msg["lights"], "lights");
     light_revision_ = rev;
     dirty_ = true;
+    interactive_ = true;
+    last_change_ = std::chrono::steady_clock::now();
   } else {
     m.integer("frame", std::nullopt, {0, 2e9});
     m.finish();
     in_flight_ = false;
+    schedule_refine();
   }
   maybe_render();
+}
+
+void WsSession::schedule_refine() {
+  if (!last_frame_reduced_ || dirty_) return;
+  auto wait = std::chrono::milliseconds(options_.idle_refine_ms) -
+              (std::chrono::steady_clock::now() - last_change_);
+  refine_timer_.expires_after(std::max(std::chrono::steady_clock::duration::zero(),
+                                       std::chrono::duration_cast<std::chrono::steady_clock::duration>(wait)));
+  refine_timer_.async_wait([self = shared_from_this()](boost::system::error_code ec) {
+    if (ec || self->closed_ || self->dirty_ || !self->last_frame_reduced_) return;
+    if (std::chrono::steady_clock::now() - self->last_change_ <
+        std::chrono::milliseconds(self->options_.idle_refine_ms))
+      return self->schedule_refine();  // moved again meanwhile
+    self->interactive_ = false;
+    self->dirty_ = true;
+    self->maybe_render();
+  });
 }
 
 void WsSession::maybe_render() {
@@ -105,11 +135,17 @@ void WsSession::maybe_render() {
   auto scene = std::make_shared<Scene>(*scene_);
   scene->camera = camera_;
   scene->lights = lights_;
+  bool reduced = interactive_;
+  if (reduced) {  // cheaper while the user interacts
+    scene->width = std::max(1, scene->width / 2);
+    scene->height = std::max(1, scene->height / 2);
+  }
+  last_frame_reduced_ = reduced;
   long long frame = next_frame_++, cam_rev = camera_revision_, light_rev = light_revision_;
   std::string pipeline = pipeline_, terms = terms_, format = format_;
   Settings settings = settings_;
   boost::asio::post(workers_, [self = shared_from_this(), scene, frame, cam_rev, light_rev, pipeline,
-                               terms, format, settings] {
+                               terms, format, settings, reduced] {
     nlohmann::json header;
     std::string bytes;
     try {
@@ -119,7 +155,7 @@ void WsSession::maybe_render() {
       header = {{"type", "frame"}, {"frame", frame}, {"camera_revision", cam_rev},
                 {"light_revision", light_rev}, {"pipeline", r.plan.pipeline}, {"plan", r.plan},
                 {"timings_ms", timings}, {"width", r.image.width}, {"height", r.image.height},
-                {"format", format}};
+                {"format", format}, {"reduced", reduced}};
       bytes = encode_image(r.image, format);  // encoded here, off the render thread
     } catch (const std::exception& e) {
       header = {{"type", "error"}, {"error", e.what()}, {"frame", frame}};

@@ -9,7 +9,8 @@
 //
 // Latest wins: camera and light messages only replace the session's state; a frame renders the
 // newest state when it starts, so stale poses are never rendered. At most one frame is in flight
-// until the client acks it. Each session has at most one job on the render thread's FIFO queue, so
+// until the client acks it. While poses keep coming frames are rendered at half size; after
+// ~200 ms without a change a full-size frame refines the still view (header "reduced": false). Each session has at most one job on the render thread's FIFO queue, so
 // sessions take turns. A bad message gets {"type": "error", "error", "field"}; the connection stays.
 #pragma once
 
@@ -27,8 +28,9 @@ namespace scatter::server {
 
 class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
-  WsSession(boost::asio::ip::tcp::socket&& socket, RenderQueue& queue, Metrics& metrics,
-            boost::asio::thread_pool& workers, const ApiOptions& options);
+  // Holds one of the Api's session slots (taken by the caller) and gives it back when it ends.
+  WsSession(boost::asio::ip::tcp::socket&& socket, Api& api, boost::asio::thread_pool& workers);
+  ~WsSession();
   void run(boost::beast::http::request<boost::beast::http::string_body> upgrade);
 
  private:
@@ -39,9 +41,11 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void send(std::string message, bool binary);
   void do_write();
   void send_error(const std::string& error, const std::string& field);
+  void schedule_refine();
 
   boost::beast::websocket::stream<boost::beast::tcp_stream> ws_;
   boost::beast::flat_buffer buffer_;
+  Api& api_;
   RenderQueue& queue_;
   Metrics& metrics_;
   boost::asio::thread_pool& workers_;
@@ -55,6 +59,11 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   Settings settings_;
   long long camera_revision_ = 0, light_revision_ = 0;
   bool dirty_ = false, in_flight_ = false, closed_ = false;
+  // While the user moves the camera or lights, frames render at half size; once the view has
+  // been still for idle_refine_ms, one full-size frame follows.
+  bool interactive_ = false, last_frame_reduced_ = false;
+  std::chrono::steady_clock::time_point last_change_;
+  boost::asio::steady_timer refine_timer_;
   long long next_frame_ = 1;
   std::deque<std::pair<std::shared_ptr<const std::string>, bool>> writes_;
 };

@@ -45,6 +45,8 @@ Handler add_serve_command(CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(1, 4096));
   cmd->add_option("--max-image", o->server.api.max_image, "Largest image side a request may ask")
       ->capture_default_str()->check(CLI::Range(16, 8192));
+  cmd->add_option("--max-sessions", o->server.api.max_sessions, "Live WebSocket sessions at once")
+      ->capture_default_str()->check(CLI::Range(1, 10000));
   cmd->add_option("--device", o->server.gpu.cl_device, "OpenCL device: P:D or part of its name");
   return [o] { return run_serve(*o); };
 }

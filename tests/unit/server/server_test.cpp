@@ -169,6 +169,14 @@ TEST_F(ServerTest, WebSocketStreamsFramesAndTheLatestPoseWins) {
   }
   EXPECT_EQ(last, 100);
   EXPECT_LE(frames, 3);  // far fewer frames than poses
+  EXPECT_EQ(h["reduced"], true);  // cheaper frames while the camera moves
+  EXPECT_EQ(h["width"], 32);
+  // The view stays still: one full-size frame refines it.
+  h = c.next_frame(image);
+  ASSERT_EQ(h["type"], "frame") << h.dump();
+  EXPECT_EQ(h["reduced"], false);
+  EXPECT_EQ(h["width"], 64);
+  EXPECT_EQ(h["camera_revision"], 100);
   c.close();
 }
 
@@ -188,6 +196,33 @@ TEST_F(ServerTest, WebSocketBadMessagesGetErrorsAndTheConnectionStays) {
   std::string image;
   EXPECT_EQ(c.next_frame(image)["type"], "frame");
   c.close();
+}
+
+TEST_F(ServerTest, SessionsBeyondTheLimitAreRefusedUntilOneEnds) {
+  TearDown();  // restart with a limit of two sessions
+  ServerOptions o;
+  o.port = 0;
+  o.api.scenes_dir = test::source_path("scenes");
+  o.api.max_sessions = 2;
+  server_ = std::make_unique<Server>(o);
+  thread_ = std::thread([this] { server_->run(false); });
+  auto a = std::make_unique<WsClient>(server_->port());
+  WsClient b(server_->port());
+  EXPECT_THROW(WsClient(server_->port()), boost::system::system_error);  // 503 on the upgrade
+  a->close();
+  a.reset();
+  bool admitted = false;
+  for (int i = 0; i < 50 && !admitted; ++i) {  // the slot comes back once the session is gone
+    try {
+      WsClient c(server_->port());
+      admitted = true;
+      c.close();
+    } catch (const boost::system::system_error&) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  }
+  EXPECT_TRUE(admitted);
+  b.close();
 }
 
 TEST_F(ServerTest, AClientVanishingMidFrameCostsNothing) {
