@@ -24,14 +24,9 @@ std::vector<float> pack_lights(const std::vector<Light>& lights) {
 }
 
 std::vector<float> pack_camera(const Camera& c, int width, int height) {
-  Vec3 f = normalize(c.target - c.position);
-  Vec3 r = normalize(cross(f, c.up));
-  Vec3 u = cross(r, f);
-  double t = std::tan(c.fov_deg * std::numbers::pi / 360);
-  r = r * (t * width / height);
-  u = u * t;
+  CameraFrame frame = camera_frame(c, width, height);
   std::vector<float> out;
-  for (const Vec3& v : {c.position, f, r, u})
+  for (const Vec3& v : {c.position, frame.forward, frame.right, frame.up})
     for (int k = 0; k < 3; ++k) out.push_back(float(v[k]));
   return out;
 }

@@ -51,18 +51,12 @@ void check_sizes(const Image& a, const Image& b, const std::vector<uint8_t>& mas
 }  // namespace
 
 std::vector<uint8_t> coverage_mask(const Scene& scene, const VoxelGrid& grid) {
-  const Camera& c = scene.camera;
-  Vec3 f = normalize(c.target - c.position);
-  Vec3 r = normalize(cross(f, c.up));
-  Vec3 u = cross(r, f);
-  double t = std::tan(c.fov_deg * std::numbers::pi / 360);
+  CameraFrame frame = camera_frame(scene.camera, scene.width, scene.height);
   std::vector<uint8_t> mask(size_t(scene.width) * scene.height);
   for (int y = 0; y < scene.height; ++y)
-    for (int x = 0; x < scene.width; ++x) {
-      double sx = (2 * (x + 0.5) / scene.width - 1) * t * scene.width / scene.height;
-      double sy = (1 - 2 * (y + 0.5) / scene.height) * t;
-      mask[size_t(y) * scene.width + x] = hits_occupied(grid, c.position, normalize(f + r * sx + u * sy));
-    }
+    for (int x = 0; x < scene.width; ++x)
+      mask[size_t(y) * scene.width + x] =
+          hits_occupied(grid, scene.camera.position, frame.ray(x, y, scene.width, scene.height));
   return mask;
 }
 

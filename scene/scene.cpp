@@ -1,6 +1,8 @@
 #include "scene/scene.hpp"
 
+#include <cmath>
 #include <fstream>
+#include <numbers>
 
 namespace scatter {
 namespace {
@@ -146,6 +148,14 @@ std::vector<Light> parse_lights(const nlohmann::json& lights, const std::string&
   for (size_t i = 0; i < lights.size(); ++i)
     out.push_back(parse_light(JsonObject(lights[i], path + "[" + std::to_string(i) + "]")));
   return out;
+}
+
+CameraFrame camera_frame(const Camera& c, int width, int height) {
+  Vec3 f = normalize(c.target - c.position);
+  Vec3 r = normalize(cross(f, c.up));
+  Vec3 u = cross(r, f);
+  double t = std::tan(c.fov_deg * std::numbers::pi / 360);
+  return {f, r * (t * width / height), u * t};
 }
 
 Scene load_scene(const std::filesystem::path& path, const SceneLimits& limits) {

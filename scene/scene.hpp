@@ -40,6 +40,18 @@ struct Camera {
   double fov_deg = 40;
 };
 
+// The pinhole camera's frame for a width x height image: the ray through pixel (i, j)'s centre
+// (row 0 at the top) is normalize(forward + right * sx + up * sy) with
+// sx = 2 (i + 0.5) / width - 1 and sy = 1 - 2 (j + 0.5) / height; right and up carry tan(fov / 2)
+// (and the aspect ratio).
+struct CameraFrame {
+  Vec3 forward, right, up;
+  Vec3 ray(int i, int j, int width, int height) const {
+    return normalize(forward + right * (2 * (i + 0.5) / width - 1) + up * (1 - 2 * (j + 0.5) / height));
+  }
+};
+CameraFrame camera_frame(const Camera& camera, int width, int height);
+
 // Blinn-Phong parameters for the surface term (normalised so the BRDF conserves energy).
 struct SurfaceMaterial {
   Vec3 diffuse{0.8, 0.8, 0.8};

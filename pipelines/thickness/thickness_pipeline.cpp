@@ -176,13 +176,11 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   uniform1i(integ, "back", 1);
   glBindTextureUnit(0, front.color_texture());
   glBindTextureUnit(1, back.color_texture());
-  const Camera& c = scene.camera;
-  Vec3 f = normalize(c.target - c.position), r = normalize(cross(f, c.up)), u = cross(r, f);
-  double t = std::tan(c.fov_deg * std::numbers::pi / 360);
+  CameraFrame frame = camera_frame(scene.camera, scene.width, scene.height);
   uniform3(integ, "eye", eye);
-  uniform3(integ, "forward", f);
-  uniform3(integ, "right", r * (t * scene.width / scene.height));
-  uniform3(integ, "up", u * t);
+  uniform3(integ, "forward", frame.forward);
+  uniform3(integ, "right", frame.right);
+  uniform3(integ, "up", frame.up);
   glProgramUniform2f(integ, glGetUniformLocation(integ, "size"), float(scene.width), float(scene.height));
   double density = scene.medium.density->density(Vec3{});
   uniform3(integ, "sigma_s", scene.medium.sigma_s * density);
