@@ -1,6 +1,7 @@
 #include "gpu/gl_objects.hpp"
 
 #include <cstdio>
+#include <vector>
 
 #include "gpu/embedded_sources.hpp"
 #include "gpu/error.hpp"
@@ -66,12 +67,11 @@ GlObject compile(GLenum type, const std::string& path) {
 
 }  // namespace
 
-GlObject build_program(const std::string& vertex_path, const std::string& fragment_path) {
-  GlObject vs = compile(GL_VERTEX_SHADER, vertex_path);
-  GlObject fs = compile(GL_FRAGMENT_SHADER, fragment_path);
+namespace {
+
+GlObject link(const std::vector<const GlObject*>& stages, const std::string& what) {
   GlObject program = GlObject::create(GlKind::Program);
-  glAttachShader(program.get(), vs.get());
-  glAttachShader(program.get(), fs.get());
+  for (const GlObject* s : stages) glAttachShader(program.get(), s->get());
   glLinkProgram(program.get());
   GLint ok = 0;
   glGetProgramiv(program.get(), GL_LINK_STATUS, &ok);
@@ -80,9 +80,22 @@ GlObject build_program(const std::string& vertex_path, const std::string& fragme
     glGetProgramiv(program.get(), GL_INFO_LOG_LENGTH, &n);
     std::string log(static_cast<size_t>(std::max(n, 1)), '\0');
     glGetProgramInfoLog(program.get(), n, nullptr, log.data());
-    throw GpuError("GLSL link of " + vertex_path + " + " + fragment_path + " failed:\n" + log);
+    throw GpuError("GLSL link of " + what + " failed:\n" + log);
   }
   return program;
+}
+
+}  // namespace
+
+GlObject build_program(const std::string& vertex_path, const std::string& fragment_path) {
+  GlObject vs = compile(GL_VERTEX_SHADER, vertex_path);
+  GlObject fs = compile(GL_FRAGMENT_SHADER, fragment_path);
+  return link({&vs, &fs}, vertex_path + " + " + fragment_path);
+}
+
+GlObject build_compute_program(const std::string& path) {
+  GlObject cs = compile(GL_COMPUTE_SHADER, path);
+  return link({&cs}, path);
 }
 
 }  // namespace scatter::gpu

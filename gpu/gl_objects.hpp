@@ -41,6 +41,8 @@ class GlObject {
 // Compiles and links a vertex + fragment shader pair from shaders/; throws GpuError with the info
 // log of the stage that failed.
 GlObject build_program(const std::string& vertex_path, const std::string& fragment_path);
+// Compiles and links a compute shader from shaders/.
+GlObject build_compute_program(const std::string& path);
 
 // Throws GpuError naming `what` if glGetError reports an error.
 void check_gl(const char* what);

@@ -20,7 +20,7 @@ std::pair<std::string, std::string> AutoPipeline::choose(const Scene& scene, Ter
 
 Pipeline& AutoPipeline::delegate(const std::string& name) {
   auto& p = pipelines_[name];
-  if (!p) p = make_pipeline(name, gpu_);
+  if (!p) p = make_pipeline(name, gpu_, cache_);
   return *p;
 }
 

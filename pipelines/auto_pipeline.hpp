@@ -14,7 +14,7 @@ namespace scatter {
 
 class AutoPipeline : public Pipeline {
  public:
-  explicit AutoPipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
+  AutoPipeline(gpu::Gpu& gpu, BakeCache* cache) : gpu_(gpu), cache_(cache) {}
   std::string name() const override { return "auto"; }
   std::vector<Terms> supported_terms() const override {
     return {Terms::Single, Terms::Multiple, Terms::All};
@@ -29,6 +29,7 @@ class AutoPipeline : public Pipeline {
   Pipeline& delegate(const std::string& name);
 
   gpu::Gpu& gpu_;
+  BakeCache* cache_;
   std::map<std::string, std::unique_ptr<Pipeline>> pipelines_;
 };
 

@@ -7,6 +7,7 @@
 #include "pipelines/auto_pipeline.hpp"
 #include "pipelines/reference/reference_pipeline.hpp"
 #include "pipelines/surface/surface_pipeline.hpp"
+#include "pipelines/single/single_pipeline.hpp"
 #include "pipelines/thickness/thickness_pipeline.hpp"
 #include "protocol/json_reader.hpp"
 
@@ -61,13 +62,14 @@ void SettingsReader::finish() const {
       throw ValidationError("settings." + key, "is not a setting of pipeline " + pipeline_);
 }
 
-std::vector<std::string> pipeline_names() { return {"auto", "surface", "reference", "thickness"}; }
+std::vector<std::string> pipeline_names() { return {"auto", "surface", "reference", "thickness", "single"}; }
 
-std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu) {
-  if (name == "auto") return std::make_unique<AutoPipeline>(gpu);
+std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu, BakeCache* cache) {
+  if (name == "auto") return std::make_unique<AutoPipeline>(gpu, cache);
   if (name == "surface") return std::make_unique<SurfacePipeline>(gpu);
   if (name == "reference") return std::make_unique<ReferencePipeline>(gpu);
   if (name == "thickness") return std::make_unique<ThicknessPipeline>(gpu);
+  if (name == "single") return std::make_unique<SinglePipeline>(gpu, cache);
   std::string list;
   for (const auto& n : pipeline_names()) list += (list.empty() ? "" : ", ") + n;
   throw ValidationError("pipeline", "unknown pipeline \"" + name + "\" (known: " + list + ")");

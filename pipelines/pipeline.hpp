@@ -1,7 +1,7 @@
 // The interface every rendering pipeline implements, and the factory that makes one by name.
 //
 //   plan(scene, request)   which stages this scene and request need, and why others are skipped
-//   bake(scene)            cacheable per-asset products (none for pipelines that need no bake)
+//   bake(scene, request)   cacheable per-asset products (none for pipelines that need no bake)
 //   render(scene, request) linear float RGB holding the requested light-transport terms,
 //                          with the plan it followed and milliseconds per stage
 #pragma once
@@ -79,8 +79,18 @@ class SettingsReader {
 };
 
 struct BakeResult {
-  std::vector<StageTime> timings;  // empty when the pipeline needs no bake
+  bool needed = false;             // false: this pipeline bakes nothing
+  bool cache_hit = false;          // the product came from the cache (memory or disk)
+  std::string key;                 // content address of the product
+  std::vector<StageTime> timings;  // this call's stages (a hit: the lookup only)
+  std::vector<StageTime> bake_timings;  // the stages of the bake that made the product
+  nlohmann::json stats;            // pipeline-specific facts about the product
 };
+
+// Reports progress of a bake: stage name and the fraction of that stage done.
+using BakeProgress = std::function<void(const std::string& stage, double fraction)>;
+
+class BakeCache;
 
 void to_json(nlohmann::json& j, const StagePlan& s);
 void to_json(nlohmann::json& j, const Plan& p);
@@ -92,14 +102,16 @@ class Pipeline {
   // The terms this pipeline can render; render() rejects others with a ValidationError.
   virtual std::vector<Terms> supported_terms() const = 0;
   virtual Plan plan(const Scene& scene, const RenderRequest& request) = 0;
-  virtual BakeResult bake(const Scene&) { return {}; }
+  // Makes (or finds in the cache) what render() will need for this scene and request's settings.
+  virtual BakeResult bake(const Scene&, const RenderRequest&, const BakeProgress& = {}) { return {}; }
   virtual RenderResult render(const Scene& scene, const RenderRequest& request) = 0;
 };
 
 // Names the factory knows, in a stable order.
 std::vector<std::string> pipeline_names();
-// Throws ValidationError (field "pipeline") for an unknown name.
-std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu);
+// Throws ValidationError (field "pipeline") for an unknown name. Pipelines that bake keep their
+// products in `cache` (shared, content-addressed); without one they keep a private memory cache.
+std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu, BakeCache* cache = nullptr);
 
 // Throws ValidationError unless `pipeline` supports `terms`.
 void require_terms(const Pipeline& pipeline, Terms terms);

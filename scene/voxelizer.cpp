@@ -51,11 +51,12 @@ VoxelGrid voxelize(const Scene& scene, const VoxelizeOptions& options) {
   Vec3 size = b.size();
   VoxelGrid g;
   g.voxel = std::max({size.x, size.y, size.z}) / options.resolution;
-  if (!(g.voxel > 0) || !std::isfinite(g.voxel) || options.resolution < 1 || options.resolution > 4096)
+  if (!(g.voxel > 0) || !std::isfinite(g.voxel) || options.resolution < 1 || options.resolution > 4096 ||
+      options.margin < 0 || options.margin > 64)
     throw std::invalid_argument("cannot voxelize: the solid has no extent or the resolution is invalid");
-  g.nx = static_cast<int>(std::ceil(size.x / g.voxel)) + 2;
-  g.ny = static_cast<int>(std::ceil(size.y / g.voxel)) + 2;
-  g.nz = static_cast<int>(std::ceil(size.z / g.voxel)) + 2;
+  g.nx = static_cast<int>(std::ceil(size.x / g.voxel)) + 2 * options.margin;
+  g.ny = static_cast<int>(std::ceil(size.y / g.voxel)) + 2 * options.margin;
+  g.nz = static_cast<int>(std::ceil(size.z / g.voxel)) + 2 * options.margin;
   g.origin = b.center() - Vec3{double(g.nx), double(g.ny), double(g.nz)} * (g.voxel / 2);
   const size_t n = g.count();
   g.sigma_s.assign(3 * n, 0.f);

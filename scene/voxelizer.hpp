@@ -30,9 +30,10 @@ struct VoxelizeOptions {
   int resolution = 64;  // voxels along the longest side of the solid's bounding box
   int supersample = 4;  // k: boundary voxels are classified at k^3 points
   int threads = 0;      // 0: hardware concurrency
+  int margin = 1;       // empty voxels around the solid's bounding box on each side
 };
 
-// The grid covers the solid's bounding box plus one voxel of margin on each side.
+// The grid covers the solid's bounding box plus `margin` voxels on each side.
 VoxelGrid voxelize(const Scene& scene, const VoxelizeOptions& options);
 
 }  // namespace scatter

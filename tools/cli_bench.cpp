@@ -135,7 +135,7 @@ int run_bench(BenchOptions o) {
     RenderRequest request{terms, base, nullptr};
     request.settings[sweep.key] = v;
     auto t0 = std::chrono::steady_clock::now();
-    pipeline->bake(scene);
+    pipeline->bake(scene, request);
     double bake_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     std::vector<double> times;
     RenderResult last;

@@ -5,6 +5,7 @@
 
 #include "pipelines/pipeline.hpp"
 #include "protocol/json_reader.hpp"
+#include "tools/cache_option.hpp"
 #include "tools/commands.hpp"
 #include "tools/settings_option.hpp"
 
@@ -20,6 +21,7 @@ struct RenderOptions {
   double exposure = 1.0;
   std::string device;
   std::vector<std::string> settings;
+  std::string cache_dir;
   bool json = false;
 };
 
@@ -61,7 +63,8 @@ int run_render(const RenderOptions& o) {
   check_image_path(o.out);  // before the render, not after it
 
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
-  auto pipeline = make_pipeline(o.pipeline, gpu);
+  auto cache = open_cache(o.cache_dir);
+  auto pipeline = make_pipeline(o.pipeline, gpu, cache.get());
   RenderRequest request;
   request.settings = parse_settings(o.settings);
   if (!o.terms.empty()) {
@@ -114,6 +117,7 @@ Handler add_render_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");
   cmd->add_option("--set", o->settings, "Pipeline setting key=value (repeatable), e.g. spp=256");
+  add_cache_dir_option(cmd, o->cache_dir);
   cmd->add_flag("--json", o->json, "Print the plan and per-stage milliseconds as one JSON object");
   return [o] { return run_render(*o); };
 }

@@ -15,5 +15,6 @@ Handler add_devices_command(CLI::App& app);
 Handler add_slab_command(CLI::App& app);
 Handler add_bench_command(CLI::App& app);
 Handler add_serve_command(CLI::App& app);
+Handler add_bake_command(CLI::App& app);
 
 }  // namespace scatter::tools

@@ -1,4 +1,4 @@
-// scatterd: the scatter daemon and its one-shot verbs (render, devices).
+// scatterd: the scatter daemon and its one-shot verbs (render, bake, slab, bench, devices).
 #include <spdlog/spdlog.h>
 
 #include <iostream>
@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   add(&scatter::tools::add_slab_command);
   add(&scatter::tools::add_bench_command);
   add(&scatter::tools::add_serve_command);
+  add(&scatter::tools::add_bake_command);
 
   try {
     app.parse(argc, argv);

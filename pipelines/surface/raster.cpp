@@ -1,5 +1,6 @@
 #include "pipelines/surface/raster.hpp"
 
+#include <cmath>
 #include <numbers>
 
 #include "gpu/error.hpp"
@@ -100,6 +101,67 @@ std::vector<float> RenderTarget::read_depth() const {
   for (int y = 0; y < height_; ++y)
     std::copy_n(&gl_rows[size_t(height_ - 1 - y) * width_], width_, &rows[size_t(y) * width_]);
   return rows;
+}
+
+// "name[i]", for uniform arrays.
+std::string indexed(const char* name, size_t i) {
+  std::string s = name;
+  s.append("[").append(std::to_string(i)).append("]");
+  return s;
+}
+
+void uniform3(GLuint p, const std::string& name, const Vec3& v) {
+  glProgramUniform3f(p, glGetUniformLocation(p, name.c_str()), float(v.x), float(v.y), float(v.z));
+}
+void uniform1i(GLuint p, const std::string& name, int v) {
+  glProgramUniform1i(p, glGetUniformLocation(p, name.c_str()), v);
+}
+void uniform_matrix(GLuint p, const std::string& name, const Mat4& m) {
+  glProgramUniformMatrix4fv(p, glGetUniformLocation(p, name.c_str()), 1, GL_FALSE, m.m.data());
+}
+
+void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target, const Mat4& view,
+                   const Mat4& projection, const Vec3& origin, const Vec3& direction,
+                   bool along_direction, GLuint first_layer, float empty) {
+  uniform_matrix(program, "view", view);
+  uniform_matrix(program, "projection", projection);
+  uniform3(program, "origin", origin);
+  uniform3(program, "direction", direction);
+  uniform1i(program, "along_direction", along_direction);
+  uniform1i(program, "peel", first_layer != 0);
+  uniform1i(program, "first_layer", 0);
+  glBindTextureUnit(0, first_layer);
+  target.bind_and_clear(Vec3{empty, empty, empty});
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_CULL_FACE);
+  glUseProgram(program);
+  mesh.draw();
+  glUseProgram(0);
+  glBindTextureUnit(0, 0);
+}
+
+void set_light_uniforms(GLuint p, const std::vector<Light>& lights) {
+  const double to_rad = std::numbers::pi / 180;
+  for (size_t i = 0; i < lights.size(); ++i) {
+    const Light& l = lights[i];
+    uniform1i(p, indexed("light_type", i), l.type == Light::Type::Point ? 0 : (l.type == Light::Type::Directional ? 1 : 2));
+    uniform3(p, indexed("light_position", i), l.position);
+    uniform3(p, indexed("light_direction", i), l.direction);
+    uniform3(p, indexed("light_power", i), l.color * l.intensity);
+    glProgramUniform2f(p, glGetUniformLocation(p, indexed("light_cone", i).c_str()),
+                       float(std::cos(l.outer_deg * to_rad)), float(std::cos(l.inner_deg * to_rad)));
+  }
+  uniform1i(p, "light_count", static_cast<int>(lights.size()));
+}
+
+void set_camera_uniforms(GLuint p, const Scene& scene) {
+  CameraFrame frame = camera_frame(scene.camera, scene.width, scene.height);
+  uniform3(p, "eye", scene.camera.position);
+  uniform3(p, "forward", frame.forward);
+  uniform3(p, "right", frame.right);
+  uniform3(p, "up", frame.up);
+  glProgramUniform2f(p, glGetUniformLocation(p, "size"), float(scene.width), float(scene.height));
 }
 
 }  // namespace scatter

@@ -2,6 +2,9 @@
 // buffers, and an offscreen float colour + depth target whose depth later passes can read.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "gpu/gl_objects.hpp"
 #include "pipelines/image.hpp"
 #include "scene/scene.hpp"
@@ -46,5 +49,26 @@ class RenderTarget {
   int width_, height_;
   gpu::GlObject fbo_, color_, depth_;
 };
+
+// Uniform helpers (glProgramUniform*, by name).
+std::string indexed(const char* name, size_t i);  // "name[i]", for uniform arrays
+void uniform3(GLuint program, const std::string& name, const Vec3& v);
+void uniform1i(GLuint program, const std::string& name, int v);
+void uniform_matrix(GLuint program, const std::string& name, const Mat4& m);
+
+// light_count and, per light, light_type (0 point, 1 directional, 2 spot), light_position,
+// light_direction, light_power (colour x intensity), light_cone (cos outer, cos inner).
+void set_light_uniforms(GLuint program, const std::vector<Light>& lights);
+// eye, forward, right, up (scaled as CameraFrame) and size, for shaders that rebuild the pixel's
+// ray from gl_FragCoord.
+void set_camera_uniforms(GLuint program, const Scene& scene);
+
+// Draws the mesh into `target` with shaders/thickness/distance.*, writing the distance from
+// `origin` (along rays, or along `direction` when `along_direction`); with `first_layer` (a
+// previous layer's texture) only surfaces behind it are kept: depth peeling. Texels no surface
+// covers hold `empty`.
+void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target, const Mat4& view,
+                   const Mat4& projection, const Vec3& origin, const Vec3& direction,
+                   bool along_direction, GLuint first_layer, float empty = 0.f);
 
 }  // namespace scatter

@@ -1,41 +1,9 @@
 #include "pipelines/surface/surface_pipeline.hpp"
 
-#include <cmath>
-#include <numbers>
-
 #include "pipelines/stage_clock.hpp"
 #include "pipelines/surface/raster.hpp"
 
 namespace scatter {
-namespace {
-
-void set_light_uniforms(GLuint program, const std::vector<Light>& lights) {
-  glProgramUniform1i(program, glGetUniformLocation(program, "light_count"),
-                     static_cast<GLint>(lights.size()));
-  for (size_t i = 0; i < lights.size(); ++i) {
-    const Light& l = lights[i];
-    auto loc = [&](const char* array) {
-      std::string name = array;
-      name.append("[").append(std::to_string(i)).append("]");
-      return glGetUniformLocation(program, name.c_str());
-    };
-    int type = l.type == Light::Type::Point ? 0 : (l.type == Light::Type::Directional ? 1 : 2);
-    Vec3 power = l.color * l.intensity;
-    double to_rad = std::numbers::pi / 180;
-    glProgramUniform1i(program, loc("light_type"), type);
-    glProgramUniform3f(program, loc("light_position"), float(l.position.x),
-                       float(l.position.y), float(l.position.z));
-    glProgramUniform3f(program, loc("light_direction"), float(l.direction.x),
-                       float(l.direction.y), float(l.direction.z));
-    glProgramUniform3f(program, loc("light_power"), float(power.x), float(power.y),
-                       float(power.z));
-    glProgramUniform2f(program, loc("light_cone"), float(std::cos(l.outer_deg * to_rad)),
-                       float(std::cos(l.inner_deg * to_rad)));
-  }
-}
-
-}  // namespace
-
 Plan SurfacePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   SettingsReader(request.settings, name()).finish();  // the surface pipeline has no settings

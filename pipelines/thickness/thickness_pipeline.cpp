@@ -58,46 +58,6 @@ LightView light_view(const Light& l, const Scene& scene) {
   return v;
 }
 
-// "name[i]", for uniform arrays.
-std::string indexed(const char* name, size_t i) {
-  std::string s = name;
-  s.append("[").append(std::to_string(i)).append("]");
-  return s;
-}
-
-void uniform3(GLuint p, const std::string& name, const Vec3& v) {
-  glProgramUniform3f(p, glGetUniformLocation(p, name.c_str()), float(v.x), float(v.y), float(v.z));
-}
-void uniform1i(GLuint p, const std::string& name, int v) {
-  glProgramUniform1i(p, glGetUniformLocation(p, name.c_str()), v);
-}
-void uniform_matrix(GLuint p, const std::string& name, const Mat4& m) {
-  glProgramUniformMatrix4fv(p, glGetUniformLocation(p, name.c_str()), 1, GL_FALSE, m.m.data());
-}
-
-// Draws the mesh into `target`, writing the distance from view.origin; `peel` with the first
-// layer's texture keeps the second layer. Texels no surface covers hold `empty`.
-void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target, const Mat4& view,
-                   const Mat4& projection, const Vec3& origin, const Vec3& direction,
-                   bool along_direction, GLuint first_layer, float empty = 0.f) {
-  uniform_matrix(program, "view", view);
-  uniform_matrix(program, "projection", projection);
-  uniform3(program, "origin", origin);
-  uniform3(program, "direction", direction);
-  uniform1i(program, "along_direction", along_direction);
-  uniform1i(program, "peel", first_layer != 0);
-  uniform1i(program, "first_layer", 0);
-  glBindTextureUnit(0, first_layer);
-  target.bind_and_clear(Vec3{empty, empty, empty});
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glDisable(GL_CULL_FACE);
-  glUseProgram(program);
-  mesh.draw();
-  glUseProgram(0);
-  glBindTextureUnit(0, 0);
-}
-
 }  // namespace
 
 Plan ThicknessPipeline::plan(const Scene& scene, const RenderRequest& request) {
@@ -157,31 +117,21 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   clock.stop("depth_peel");
 
   RenderTarget out(scene.width, scene.height);
-  const double to_rad = std::numbers::pi / 180;
+  set_light_uniforms(integ, scene.lights);
   for (size_t i = 0; i < scene.lights.size(); ++i) {
     const Light& l = scene.lights[i];
     LightView v = light_view(l, scene);
     glBindTextureUnit(static_cast<GLuint>(2 + i), shadows[i]->color_texture());
     uniform1i(integ, indexed("shadow_maps", i), static_cast<int>(2 + i));
     uniform_matrix(integ, indexed("light_matrix", i), light_matrices[i]);
-    uniform1i(integ, indexed("light_type", i), l.type == Light::Type::Point ? 0 : (l.type == Light::Type::Directional ? 1 : 2));
-    uniform3(integ, indexed("light_position", i), l.type == Light::Type::Directional ? v.origin : l.position);
-    uniform3(integ, indexed("light_direction", i), l.direction);
-    uniform3(integ, indexed("light_power", i), l.color * l.intensity);
-    glProgramUniform2f(integ, glGetUniformLocation(integ, (indexed("light_cone", i)).c_str()),
-                       float(std::cos(l.outer_deg * to_rad)), float(std::cos(l.inner_deg * to_rad)));
+    // The distance a directional light's map stores is measured from its origin plane.
+    if (l.type == Light::Type::Directional) uniform3(integ, indexed("light_position", i), v.origin);
   }
-  uniform1i(integ, "light_count", static_cast<int>(scene.lights.size()));
   uniform1i(integ, "front", 0);
   uniform1i(integ, "back", 1);
   glBindTextureUnit(0, front.color_texture());
   glBindTextureUnit(1, back.color_texture());
-  CameraFrame frame = camera_frame(scene.camera, scene.width, scene.height);
-  uniform3(integ, "eye", eye);
-  uniform3(integ, "forward", frame.forward);
-  uniform3(integ, "right", frame.right);
-  uniform3(integ, "up", frame.up);
-  glProgramUniform2f(integ, glGetUniformLocation(integ, "size"), float(scene.width), float(scene.height));
+  set_camera_uniforms(integ, scene);
   double density = scene.medium.density->density(Vec3{});
   uniform3(integ, "sigma_s", scene.medium.sigma_s * density);
   uniform3(integ, "sigma_t", (scene.medium.sigma_s + scene.medium.sigma_a) * density);

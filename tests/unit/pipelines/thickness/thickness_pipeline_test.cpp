@@ -70,7 +70,7 @@ TEST(AutoPipeline, ChoosesThicknessForHomogeneousSingleAndSaysWhy) {
   EXPECT_EQ(AutoPipeline::choose(sphere, Terms::Single).first, "thickness");
   EXPECT_EQ(AutoPipeline::choose(sphere, Terms::All).first, "reference");
   EXPECT_EQ(AutoPipeline::choose(layers, Terms::Single).first, "reference");
-  AutoPipeline a(test::shared_gpu());
+  AutoPipeline a(test::shared_gpu(), nullptr);
   Plan p = a.plan(sphere, {Terms::Single, {}, nullptr});
   EXPECT_EQ(p.pipeline, "auto -> thickness");
   ASSERT_GE(p.stages.size(), 2u);

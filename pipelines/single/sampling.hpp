@@ -1,0 +1,32 @@
+// Weighted Poisson-disk sampling by sample elimination (Yuksel 2015), which reaches a target
+// count exactly: draw more candidates than wanted with a density that follows the local radius,
+// then repeatedly remove the candidate whose neighbours crowd it most.
+//
+// Spacing is adaptive: candidate i carries a relative radius q_i (1 = the base spacing), distances
+// are measured in units of the pair's mean q, and the weight of a pair is (1 - d/(2 r))^8 inside
+// 2 r, with r the largest Poisson radius the normalised volume allows for `target` points.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "scene/vec.hpp"
+
+namespace scatter {
+
+struct EliminationResult {
+  std::vector<int> kept;     // indices into the candidates, `target` of them
+  double base_radius = 0;    // r, in normalised units (world distance / mean q)
+};
+
+// `q` has one relative radius per candidate (all 1 for uniform spacing); `volume` is the region's
+// volume in normalised units (sum of dV / q^3). Throws std::invalid_argument if target exceeds the
+// candidates or is not positive.
+EliminationResult eliminate_samples(const std::vector<Vec3>& candidates, const std::vector<float>& q,
+                                    double volume, int target);
+
+// Smallest normalised distance between two kept samples: |a - b| / ((q_a + q_b) / 2).
+double min_normalized_distance(const std::vector<Vec3>& points, const std::vector<float>& q);
+
+}  // namespace scatter

@@ -1,0 +1,490 @@
+#include "pipelines/single/single_bake.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <thread>
+
+#include "pipelines/cl_scene.hpp"
+#include "pipelines/single/sampling.hpp"
+#include "pipelines/single/sh.hpp"
+#include "pipelines/stage_clock.hpp"
+
+namespace scatter {
+namespace {
+
+const std::vector<std::string> kProgram = {"kernels/reference/common.cl", "kernels/single/bake.cl"};
+constexpr double kCutoff = 3.0;     // Gaussians end at 3 sigma
+constexpr float kDepthClamp = 20;   // exp(-20) ~ 2e-9: deeper is dark either way
+constexpr int kMaxShell = kSingleGridMargin - 1;
+
+// Runs f(begin, end) over [0, n) on the hardware's threads.
+template <class F>
+void parallel_for(size_t n, F&& f) {
+  size_t threads = std::max(1u, std::thread::hardware_concurrency());
+  threads = std::min(threads, std::max<size_t>(1, n / 64));
+  std::vector<std::thread> pool;
+  for (size_t t = 0; t < threads; ++t)
+    pool.emplace_back([&, t] { f(n * t / threads, n * (t + 1) / threads); });
+  for (auto& th : pool) th.join();
+}
+
+// Voxel index range a Gaussian at p with cutoff radius R touches.
+struct Box {
+  int i0, i1, j0, j1, k0, k1;
+};
+Box support(const VoxelGrid& g, const Vec3& p, double R) {
+  auto lo = [&](double x, double o) { return std::max(0, int(std::floor((x - R - o) / g.voxel - 0.5))); };
+  auto hi = [&](double x, double o, int n) { return std::min(n - 1, int(std::ceil((x + R - o) / g.voxel - 0.5))); };
+  return {lo(p.x, g.origin.x), hi(p.x, g.origin.x, g.nx), lo(p.y, g.origin.y), hi(p.y, g.origin.y, g.ny),
+          lo(p.z, g.origin.z), hi(p.z, g.origin.z, g.nz)};
+}
+
+template <class F>
+void for_support(const VoxelGrid& g, const Vec3& p, double s, F&& f) {
+  const double R = kCutoff * s, inv = 1 / (2 * s * s);
+  Box b = support(g, p, R);
+  for (int k = b.k0; k <= b.k1; ++k)
+    for (int j = b.j0; j <= b.j1; ++j)
+      for (int i = b.i0; i <= b.i1; ++i) {
+        Vec3 d = g.center(i, j, k) - p;
+        double r2 = dot(d, d);
+        if (r2 > R * R) continue;
+        f(g.index(i, j, k), std::exp(-r2 * inv));
+      }
+}
+
+// ---- Serialisation: a flat little-endian record -----------------------------------------------
+
+constexpr uint32_t kMagic = 0x31425353;  // "SSB1"
+
+class Writer {
+ public:
+  template <class T>
+  void put(const T& v) {
+    out.append(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  void put_floats(const std::vector<float>& v) {
+    put<uint64_t>(v.size());
+    out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(float));
+  }
+  std::string out;
+};
+
+class Reader {
+ public:
+  explicit Reader(const std::string& s) : s_(s) {}
+  template <class T>
+  T get() {
+    need(sizeof(T));
+    T v;
+    std::memcpy(&v, s_.data() + at_, sizeof v);
+    at_ += sizeof v;
+    return v;
+  }
+  std::vector<float> get_floats(size_t expected) {
+    uint64_t n = get<uint64_t>();
+    if (n != expected) throw std::runtime_error("single bake: array of " + std::to_string(n) +
+                                                " floats where " + std::to_string(expected) + " belong");
+    need(n * sizeof(float));
+    std::vector<float> v(n);
+    std::memcpy(v.data(), s_.data() + at_, n * sizeof(float));
+    at_ += n * sizeof(float);
+    return v;
+  }
+  bool done() const { return at_ == s_.size(); }
+
+ private:
+  void need(size_t n) {
+    if (s_.size() - at_ < n) throw std::runtime_error("single bake: truncated record");
+  }
+  const std::string& s_;
+  size_t at_ = 0;
+};
+
+}  // namespace
+
+SingleBakeParams SingleBakeParams::read(SettingsReader& r) {
+  SingleBakeParams p;
+  p.directions = r.integer("directions", p.directions, 8, 4096);
+  p.samples = r.integer("samples", p.samples, 16, 2'000'000);
+  p.sh_bands = r.integer("sh_order", p.sh_bands, 2, kMaxShBands);
+  p.sh_depth = r.integer("sh_depth", p.sh_depth ? 1 : 0, 0, 1) == 1;
+  p.radius = r.number("radius", p.radius, 0.2, 2.0);
+  p.candidates = r.integer("candidates", p.candidates, 2, 20);
+  p.seed = static_cast<uint32_t>(r.integer("seed", int(p.seed), 0, 1 << 30));
+  return p;
+}
+
+std::string SingleBake::serialize() const {
+  Writer w;
+  w.put(kMagic);
+  w.put<int32_t>(params.directions);
+  w.put<int32_t>(params.samples);
+  w.put<int32_t>(params.sh_bands);
+  w.put<int32_t>(params.sh_depth);
+  w.put<double>(params.radius);
+  w.put<int32_t>(params.candidates);
+  w.put<uint32_t>(params.seed);
+  w.put<int32_t>(count);
+  w.put<double>(coverage_mean);
+  w.put<double>(coverage_spread);
+  w.put_floats(position);
+  w.put_floats(sigma);
+  w.put_floats(weight);
+  w.put_floats(sigma_s);
+  w.put_floats(sh);
+  w.put<uint32_t>(static_cast<uint32_t>(timings.size()));
+  for (const StageTime& t : timings) {
+    w.put<uint32_t>(static_cast<uint32_t>(t.stage.size()));
+    w.out += t.stage;
+    w.put<double>(t.ms);
+  }
+  return std::move(w.out);
+}
+
+SingleBake SingleBake::deserialize(const std::string& bytes) {
+  Reader r(bytes);
+  if (r.get<uint32_t>() != kMagic) throw std::runtime_error("single bake: not a single-scattering bake");
+  SingleBake b;
+  b.params.directions = r.get<int32_t>();
+  b.params.samples = r.get<int32_t>();
+  b.params.sh_bands = r.get<int32_t>();
+  b.params.sh_depth = r.get<int32_t>() != 0;
+  b.params.radius = r.get<double>();
+  b.params.candidates = r.get<int32_t>();
+  b.params.seed = r.get<uint32_t>();
+  b.count = r.get<int32_t>();
+  if (b.count < 0 || b.params.sh_bands < 1 || b.params.sh_bands > kMaxShBands)
+    throw std::runtime_error("single bake: bad header");
+  b.coverage_mean = r.get<double>();
+  b.coverage_spread = r.get<double>();
+  const size_t n = size_t(b.count);
+  b.position = r.get_floats(3 * n);
+  b.sigma = r.get_floats(n);
+  b.weight = r.get_floats(n);
+  b.sigma_s = r.get_floats(3 * n);
+  b.sh = r.get_floats(3 * n * b.coefficients());
+  uint32_t stages = r.get<uint32_t>();
+  if (stages > 64) throw std::runtime_error("single bake: bad stage list");
+  for (uint32_t i = 0; i < stages; ++i) {
+    uint32_t len = r.get<uint32_t>();
+    if (len > 256) throw std::runtime_error("single bake: bad stage name");
+    std::string name;
+    for (uint32_t c = 0; c < len; ++c) name += r.get<char>();
+    b.timings.push_back({name, r.get<double>()});
+  }
+  if (!r.done()) throw std::runtime_error("single bake: trailing bytes");
+  return b;
+}
+
+std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<Vec3>& dirs) {
+  const size_t voxels = grid.count();
+  std::vector<float> sigma(voxels);
+  for (size_t v = 0; v < voxels; ++v)
+    sigma[v] = (grid.sigma_s[3 * v] + grid.sigma_a[3 * v] + grid.sigma_s[3 * v + 1] + grid.sigma_a[3 * v + 1] +
+                grid.sigma_s[3 * v + 2] + grid.sigma_a[3 * v + 2]) / 3;
+  cl::Buffer d_sigma = upload(cl, sigma);
+  std::vector<float> zeros(3 * voxels, 0.f);
+  cl::Buffer moment(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, zeros.size() * sizeof(float), zeros.data());
+  cl::Kernel kernel(cl.program(kProgram), "sweep_slice");
+  const int dims[3] = {grid.nx, grid.ny, grid.nz};
+  const double d_omega = 4 * std::numbers::pi / double(dirs.size());
+  auto& queue = cl.queue();
+  std::vector<cl::Buffer> keep;  // group buffers stay alive until the queue drains
+  for (int axis = 0; axis < 3; ++axis)
+    for (int sign : {1, -1}) {
+      std::vector<float> params, moments;
+      for (const Vec3& w : dirs) {
+        double c[3] = {w.x, w.y, w.z};
+        double a = std::abs(c[axis]);
+        int major = std::abs(c[0]) >= std::abs(c[1]) && std::abs(c[0]) >= std::abs(c[2]) ? 0
+                    : (std::abs(c[1]) >= std::abs(c[2]) ? 1 : 2);
+        if (major != axis || (c[axis] >= 0 ? 1 : -1) != sign) continue;
+        int ua = axis == 0 ? 1 : 0, va = axis == 2 ? 1 : 2;
+        params.insert(params.end(), {float(c[ua] / a), float(c[va] / a), float(grid.voxel / a), 0.f});
+        moments.insert(moments.end(), {float(w.x * d_omega), float(w.y * d_omega), float(w.z * d_omega), 0.f});
+      }
+      if (params.empty()) continue;
+      const int count = static_cast<int>(params.size() / 4);
+      const int n = dims[axis];
+      const int nu = axis == 0 ? grid.ny : grid.nx, nv = axis == 2 ? grid.ny : grid.nz;
+      const size_t slice_floats = size_t(count) * nu * nv;
+      cl::Buffer d_params = upload(cl, params), d_moments = upload(cl, moments);
+      cl::Buffer a(cl.context(), CL_MEM_READ_WRITE, slice_floats * sizeof(float));
+      cl::Buffer b(cl.context(), CL_MEM_READ_WRITE, slice_floats * sizeof(float));
+      // Downstream first: the slice nearest the exit has no upstream neighbour inside the grid.
+      for (int step = 0; step < n; ++step) {
+        int k = sign > 0 ? n - 1 - step : step;
+        cl::Buffer& prev = (step % 2) ? a : b;
+        cl::Buffer& cur = (step % 2) ? b : a;
+        gpu::set_args(kernel, d_sigma, grid.nx, grid.ny, grid.nz, axis, k, k + sign, d_params, d_moments,
+                      count, prev, cur, moment);
+        queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(nu), size_t(nv)));
+      }
+      queue.finish();
+      keep.clear();
+    }
+  std::vector<float> out(3 * voxels);
+  queue.enqueueReadBuffer(moment, CL_TRUE, 0, out.size() * sizeof(float), out.data());
+  return out;
+}
+
+std::vector<float> divergence(const VoxelGrid& g, const std::vector<float>& T) {
+  std::vector<float> rho(g.count(), 0.f);
+  auto at = [&](int i, int j, int k, int c) -> double {
+    i = std::clamp(i, 0, g.nx - 1);
+    j = std::clamp(j, 0, g.ny - 1);
+    k = std::clamp(k, 0, g.nz - 1);
+    return T[3 * g.index(i, j, k) + c];
+  };
+  for (int k = 0; k < g.nz; ++k)
+    for (int j = 0; j < g.ny; ++j)
+      for (int i = 0; i < g.nx; ++i) {
+        size_t v = g.index(i, j, k);
+        if (g.occupancy[v] <= 0) continue;
+        double div = (at(i + 1, j, k, 0) - at(i - 1, j, k, 0)) + (at(i, j + 1, k, 1) - at(i, j - 1, k, 1)) +
+                     (at(i, j, k + 1, 2) - at(i, j, k - 1, 2));
+        rho[v] = static_cast<float>(std::abs(div) / (2 * g.voxel));
+      }
+  return rho;
+}
+
+std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<float>& positions,
+                                 const std::vector<Vec3>& dirs) {
+  const int samples = static_cast<int>(positions.size() / 3), n = static_cast<int>(dirs.size());
+  std::vector<float> sigma_t(grid.sigma_s.size());
+  for (size_t i = 0; i < sigma_t.size(); ++i) sigma_t[i] = grid.sigma_s[i] + grid.sigma_a[i];
+  std::vector<float> flat_dirs;
+  for (const Vec3& d : dirs) flat_dirs.insert(flat_dirs.end(), {float(d.x), float(d.y), float(d.z)});
+  cl::Buffer d_sigma = upload(cl, sigma_t), d_pos = upload(cl, positions), d_dirs = upload(cl, flat_dirs);
+  std::vector<float> out(size_t(samples) * n * 3);
+  if (samples == 0) return out;
+  cl::Buffer d_out(cl.context(), CL_MEM_WRITE_ONLY, out.size() * sizeof(float));
+  cl::Kernel k(cl.program(kProgram), "sample_depths");
+  cl_float3 origin{{float(grid.origin.x), float(grid.origin.y), float(grid.origin.z)}};
+  gpu::set_args(k, origin, float(grid.voxel), grid.nx, grid.ny, grid.nz, d_sigma, d_pos, samples, d_dirs, n, d_out);
+  cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(samples), size_t(n)));
+  cl.queue().enqueueReadBuffer(d_out, CL_TRUE, 0, out.size() * sizeof(float), out.data());
+  return out;
+}
+
+double gaussian_sum(const SingleBake& b, const Vec3& p) {
+  double s = 0;
+  for (int i = 0; i < b.count; ++i) {
+    Vec3 c{b.position[3 * i], b.position[3 * i + 1], b.position[3 * i + 2]};
+    double sg = b.sigma[i], r2 = dot(p - c, p - c);
+    if (r2 > kCutoff * kCutoff * sg * sg) continue;
+    s += b.weight[i] * std::exp(-r2 / (2 * sg * sg));
+  }
+  return s;
+}
+
+SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeParams& p,
+                       const BakeProgress& progress) {
+  auto report = [&](const char* stage, double f) {
+    if (progress) progress(stage, f);
+  };
+  SingleBake bake;
+  bake.params = p;
+  StageClock clock(bake.timings);
+  const size_t voxels = g.count();
+  const double dv = g.voxel * g.voxel * g.voxel;
+
+  // 1. Direction-dependent optical depth, folded into its first moment.
+  report("ddod", 0);
+  const std::vector<Vec3> dirs = sphere_directions(p.directions);
+  std::vector<float> moment = first_moment(cl, g, dirs);
+  clock.stop("ddod");
+  report("ddod", 1);
+
+  // 2. Sampling density.
+  std::vector<float> rho = divergence(g, moment);
+  clock.stop("divergence");
+  report("divergence", 1);
+
+  // 3. Relative radius q in [0.5, 2] from rho (high rho: dense, small radius).
+  std::vector<float> medium_rho;
+  for (size_t v = 0; v < voxels; ++v)
+    if (g.occupancy[v] > 0) medium_rho.push_back(rho[v]);
+  if (medium_rho.empty()) throw ValidationError("scene", "the object holds no medium to sample");
+  std::sort(medium_rho.begin(), medium_rho.end());
+  const double lo = medium_rho[medium_rho.size() / 20], hi = medium_rho[medium_rho.size() * 19 / 20];
+  const bool constant = !(hi - lo > 1e-6 * std::max(hi, 1e-30));
+  std::vector<float> q(voxels, 1.f);
+  for (size_t v = 0; v < voxels; ++v)
+    if (!constant) q[v] = static_cast<float>(2.0 - 1.5 * std::clamp((rho[v] - lo) / (hi - lo), 0.0, 1.0));
+
+  // The sampled region: the medium plus a shell of `shell` voxels around it, each shell voxel
+  // taking the smallest radius of its neighbours inward. Gaussians centred in the shell keep the
+  // sum of Gaussians near one up to the surface (the mesh's depth clips what lies outside), where
+  // single scattering is strongest; without them the sum falls to about half at the surface.
+  double medium_volume = 0;
+  float q_min = 2;
+  for (size_t v = 0; v < voxels; ++v)
+    if (g.occupancy[v] > 0) {
+      medium_volume += dv / (double(q[v]) * q[v] * q[v]);
+      q_min = std::min(q_min, q[v]);
+    }
+  const double r_estimate = std::cbrt(medium_volume / (4 * std::sqrt(2.0) * p.samples));
+  const int shell = std::clamp(int(std::ceil(2.5 * p.radius * 2 * r_estimate * q_min / g.voxel)), 1, kMaxShell);
+  // anchor: for a shell voxel, a medium voxel it was reached from; its samples read their optical
+  // depth there (shifted by the same offset), since from outside a convex surface a grazing light
+  // or view direction misses the medium that the Gaussian covers inside.
+  std::vector<uint8_t> layer(voxels, 255);
+  std::vector<size_t> anchor(voxels);
+  for (size_t v = 0; v < voxels; ++v) {
+    anchor[v] = v;
+    if (g.occupancy[v] > 0) layer[v] = 0;
+  }
+  for (int d = 1; d <= shell; ++d)
+    for (int k = 0; k < g.nz; ++k)
+      for (int j = 0; j < g.ny; ++j)
+        for (int i = 0; i < g.nx; ++i) {
+          size_t v = g.index(i, j, k);
+          if (layer[v] != 255) continue;
+          const int nb[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
+          for (const auto& n : nb) {
+            if (n[0] < 0 || n[1] < 0 || n[2] < 0 || n[0] >= g.nx || n[1] >= g.ny || n[2] >= g.nz) continue;
+            size_t u = g.index(n[0], n[1], n[2]);
+            if (layer[u] != d - 1) continue;
+            if (layer[v] == 255 || q[u] < q[v]) {
+              q[v] = q[u];
+              anchor[v] = anchor[u];
+            }
+            layer[v] = static_cast<uint8_t>(d);
+          }
+        }
+  std::vector<double> cdf(voxels + 1, 0.0);
+  double volume = 0;
+  for (size_t v = 0; v < voxels; ++v) {
+    double w = layer[v] <= shell ? dv / (double(q[v]) * q[v] * q[v]) : 0.0;
+    volume += w;
+    cdf[v + 1] = cdf[v] + w;
+  }
+  const int m = p.samples * p.candidates;
+  std::vector<Vec3> candidates(m);
+  std::vector<float> cq(m);
+  std::vector<size_t> cvoxel(m);
+  std::mt19937_64 rng(p.seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  for (int c = 0; c < m; ++c) {
+    double x = uni(rng) * cdf.back();
+    size_t v = std::min(voxels - 1, size_t(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin()) - 1);
+    int i = int(v % g.nx), j = int((v / g.nx) % g.ny), k = int(v / (size_t(g.nx) * g.ny));
+    candidates[c] = g.origin + Vec3{i + uni(rng), j + uni(rng), k + uni(rng)} * g.voxel;
+    cq[c] = q[v];
+    cvoxel[c] = v;
+  }
+  report("sampling", 0.2);
+  EliminationResult kept = eliminate_samples(candidates, cq, volume, p.samples);
+  bake.count = p.samples;
+  bake.position.reserve(3 * size_t(bake.count));
+  std::vector<float> depth_position;  // where each sample's optical depth is read
+  auto voxel_centre = [&](size_t v) {
+    return g.center(int(v % g.nx), int((v / g.nx) % g.ny), int(v / (size_t(g.nx) * g.ny)));
+  };
+  for (int c : kept.kept) {
+    const Vec3& x = candidates[c];
+    bake.position.insert(bake.position.end(), {float(x.x), float(x.y), float(x.z)});
+    Vec3 xd = x + (voxel_centre(anchor[cvoxel[c]]) - voxel_centre(cvoxel[c]));
+    depth_position.insert(depth_position.end(), {float(xd.x), float(xd.y), float(xd.z)});
+    // Local spacing: twice the Poisson radius, scaled by the local relative radius.
+    bake.sigma.push_back(static_cast<float>(p.radius * 2 * kept.base_radius * cq[c]));
+  }
+  clock.stop("sampling");
+  report("sampling", 1);
+
+  // 4. Gaussian weights: start from spacing^3 / Gaussian volume, then rescale each weight by the
+  //    Gaussian-weighted mean of 1 / (sum of all Gaussians) over the voxel centres of the medium
+  //    and all but the outermost shell layer.
+  const int n = bake.count;
+  auto pos = [&](int i) { return Vec3{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]}; };
+  bake.weight.resize(n);
+  for (int i = 0; i < n; ++i) {
+    double spacing = bake.sigma[i] / p.radius;
+    bake.weight[i] = static_cast<float>(std::pow(spacing / bake.sigma[i], 3) / std::pow(2 * std::numbers::pi, 1.5));
+  }
+  std::vector<double> sum(voxels);
+  auto accumulate = [&] {
+    std::fill(sum.begin(), sum.end(), 0.0);
+    for (int i = 0; i < n; ++i)
+      for_support(g, pos(i), bake.sigma[i], [&](size_t v, double e) { sum[v] += bake.weight[i] * e; });
+  };
+  for (int pass = 0; pass < 4; ++pass) {
+    accumulate();
+    parallel_for(size_t(n), [&](size_t a, size_t b) {
+      for (size_t i = a; i < b; ++i) {
+        double num = 0, den = 0;
+        for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
+          if (layer[v] >= shell) return;
+          num += e;
+          den += e * sum[v];
+        });
+        if (den > 0) bake.weight[i] = static_cast<float>(bake.weight[i] * num / den);
+      }
+    });
+    report("gaussians", (pass + 1) / 5.0);
+  }
+  accumulate();
+  double s1 = 0, s2 = 0, cnt = 0;
+  for (size_t v = 0; v < voxels; ++v)
+    if (g.inside[v]) {
+      s1 += sum[v];
+      s2 += sum[v] * sum[v];
+      cnt += 1;
+    }
+  bake.coverage_mean = cnt > 0 ? s1 / cnt : 0;
+  bake.coverage_spread = cnt > 0 ? std::sqrt(std::max(0.0, s2 / cnt - bake.coverage_mean * bake.coverage_mean)) /
+                                       std::max(1e-30, bake.coverage_mean) : 0;
+  // Each sample's sigma_s: the Gaussian-weighted mean of the medium (boundary voxels hold
+  // sigma_s times their medium fraction, so the mean divides by the weighted occupancy).
+  bake.sigma_s.assign(3 * size_t(n), 0.f);
+  parallel_for(size_t(n), [&](size_t a, size_t b) {
+    for (size_t i = a; i < b; ++i) {
+      double acc[3] = {0, 0, 0}, occ = 0;
+      for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
+        for (int c = 0; c < 3; ++c) acc[c] += e * g.sigma_s[3 * v + c];
+        occ += e * g.occupancy[v];
+      });
+      for (int c = 0; c < 3; ++c) bake.sigma_s[3 * i + c] = occ > 0 ? static_cast<float>(acc[c] / occ) : 0.f;
+    }
+  });
+  clock.stop("gaussians");
+  report("gaussians", 1);
+
+  // 5. Spherical harmonics of the optical depth (or transmittance) per sample and channel, in
+  //    chunks that keep the depth table under ~64 MB.
+  const int nc = sh_count(p.sh_bands);
+  std::vector<float> basis(dirs.size() * nc);
+  for (size_t k = 0; k < dirs.size(); ++k) sh_basis(dirs[k], p.sh_bands, &basis[k * nc]);
+  bake.sh.assign(size_t(n) * 3 * nc, 0.f);
+  const size_t chunk = std::max<size_t>(1, (16u << 20) / (dirs.size() * 3));
+  const double w = 4 * std::numbers::pi / double(dirs.size());
+  for (size_t first = 0; first < size_t(n); first += chunk) {
+    size_t last = std::min(size_t(n), first + chunk);
+    std::vector<float> part(depth_position.begin() + 3 * first, depth_position.begin() + 3 * last);
+    std::vector<float> tau = sample_depths(cl, g, part, dirs);
+    parallel_for(last - first, [&](size_t a, size_t b) {
+      std::vector<double> acc(3 * nc);
+      for (size_t s = a; s < b; ++s) {
+        std::fill(acc.begin(), acc.end(), 0.0);
+        for (size_t k = 0; k < dirs.size(); ++k)
+          for (int c = 0; c < 3; ++c) {
+            float t = tau[(s * dirs.size() + k) * 3 + c];
+            double f = p.sh_depth ? std::min(t, kDepthClamp) : std::exp(-double(t));
+            for (int i = 0; i < nc; ++i) acc[c * nc + i] += f * basis[k * nc + i];
+          }
+        for (int i = 0; i < 3 * nc; ++i) bake.sh[(first + s) * 3 * nc + i] = static_cast<float>(acc[i] * w);
+      }
+    });
+    report("sh", double(last) / n);
+  }
+  clock.stop("sh");
+  return bake;
+}
+
+}  // namespace scatter

@@ -1,0 +1,79 @@
+// The `single` pipeline's bake (papers/single-scattering-inhomogeneous.md, section 4): from the
+// voxelized medium to a set of Gaussian samples, each with its scattering coefficient and the
+// spherical-harmonic projection of its direction-dependent optical depth (or transmittance).
+//
+// Stages (timed separately):
+//   ddod       optical depth for n directions by slice sweeps (kernels/single/bake.cl), folded at
+//              once into the first moment T(x) = sum_w exp(-tau(x, w)) w dOmega (equation 4)
+//   divergence rho(x) = |div T(x)| by central differences
+//   sampling   weighted Poisson-disk sampling by sample elimination, exactly `samples` points; the
+//              local radius maps rho linearly onto [r/2, 2r] (the paper's rule; robust range:
+//              5th-95th percentile of rho), a constant rho giving uniform spacing. Samples fill
+//              the medium and a thin shell outside it, so that the Gaussians sum to one right up
+//              to the surface (the render clips at the mesh)
+//   gaussians  standard deviation `radius` x the local spacing, cut off at 3 sigma; weights
+//              rescaled (4 passes) so the Gaussians sum to one at the voxel centres inside; each
+//              sample's sigma_s is the Gaussian-weighted mean of the medium around it
+//   sh         exact optical depth per channel from every sample along every direction (DDA),
+//              projected onto `sh_bands`^2 real spherical harmonics: of exp(-tau) (the paper) or of
+//              tau itself, clamped to 20, exponentiated when rendering (`sh_depth` 1)
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "gpu/cl_context.hpp"
+#include "pipelines/pipeline.hpp"
+#include "scene/voxelizer.hpp"
+
+namespace scatter {
+
+// Empty voxels the bake's grid needs around the solid (voxelize(..., {.margin = ...})): room for
+// the shell of samples outside the surface.
+constexpr int kSingleGridMargin = 4;
+
+struct SingleBakeParams {
+  int directions = 128;
+  int samples = 25000;
+  int sh_bands = 5;        // 2..5: 4..25 coefficients per channel ("sh_order")
+  bool sh_depth = true;    // project the optical depth (true) or the transmittance (false)
+  double radius = 0.6;     // Gaussian sigma / local spacing
+  int candidates = 5;      // candidates per sample for the elimination
+  uint32_t seed = 1;
+  // Reads directions, samples, sh_order, sh_depth, radius, candidates, seed from `r`.
+  static SingleBakeParams read(SettingsReader& r);
+};
+
+struct SingleBake {
+  SingleBakeParams params;
+  int count = 0;
+  std::vector<float> position;  // 3 per sample, scene units
+  std::vector<float> sigma;     // Gaussian standard deviation per sample
+  std::vector<float> weight;    // Gaussian amplitude per sample
+  std::vector<float> sigma_s;   // 3 per sample
+  std::vector<float> sh;        // per sample, per channel, sh_bands^2 coefficients
+  // Sum of the Gaussians at the voxel centres inside: mean and relative standard deviation.
+  double coverage_mean = 0, coverage_spread = 0;
+  std::vector<StageTime> timings;
+
+  size_t coefficients() const { return size_t(params.sh_bands) * params.sh_bands; }
+  std::string serialize() const;
+  // Throws std::runtime_error if `bytes` is not a complete bake of this format.
+  static SingleBake deserialize(const std::string& bytes);
+};
+
+SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& grid, const SingleBakeParams& params,
+                       const BakeProgress& progress = {});
+
+// The pieces, for tests. First moment T per voxel (3 floats) for the given directions.
+std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<Vec3>& dirs);
+// |div T| per voxel, zero where the voxel holds no medium.
+std::vector<float> divergence(const VoxelGrid& grid, const std::vector<float>& moment);
+// Optical depth per (sample, direction, channel) from the sample to the grid's boundary.
+std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid,
+                                 const std::vector<float>& positions, const std::vector<Vec3>& dirs);
+// Sum of the baked Gaussians at p.
+double gaussian_sum(const SingleBake& bake, const Vec3& p);
+
+}  // namespace scatter

@@ -1,0 +1,265 @@
+#include "pipelines/single/single_pipeline.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <functional>
+#include <string_view>
+
+#include "bake/cache.hpp"
+#include "pipelines/stage_clock.hpp"
+#include "pipelines/surface/raster.hpp"
+#include "protocol/json_reader.hpp"
+
+namespace scatter {
+namespace {
+
+// Bump when the bake's results change, so old cache entries are not reused.
+constexpr const char* kSingleBakeVersion = "single-1";
+
+struct SingleSettings {
+  SingleBakeParams bake;
+  bool clip_back = true;
+  static SingleSettings read(const Settings& settings) {
+    SettingsReader r(settings, "single");
+    SingleSettings s;
+    s.bake = SingleBakeParams::read(r);
+    s.clip_back = r.integer("clip_back", 1, 0, 1) == 1;
+    r.finish();
+    return s;
+  }
+};
+
+template <class T>
+std::string_view bytes_of(const std::vector<T>& v) {
+  return {reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T)};
+}
+
+void add_params(BakeKey& key, const SingleBakeParams& p) {
+  key.add("directions", p.directions).add("samples", p.samples).add("sh_bands", p.sh_bands)
+      .add("sh_depth", p.sh_depth ? 1 : 0).add("radius", p.radius).add("candidates", p.candidates)
+      .add("seed", p.seed);
+}
+
+// Cheap identity of what the bake depends on, to skip even the voxelization when a live session
+// renders the same asset again: mesh bytes, the density object, the medium and the resolution.
+std::string fingerprint(const Scene& scene, const SingleBakeParams& p) {
+  std::string s;
+  auto h = [&](std::string_view b) { s += std::to_string(std::hash<std::string_view>{}(b)) + "|"; };
+  h(bytes_of(scene.mesh.positions));
+  h(bytes_of(scene.mesh.indices));
+  s += std::to_string(reinterpret_cast<uintptr_t>(scene.medium.density.get())) + "|";
+  for (const Vec3* v : {&scene.medium.sigma_s, &scene.medium.sigma_a})
+    for (int c = 0; c < 3; ++c) s += std::to_string((*v)[c]) + ",";
+  s += std::to_string(scene.voxels) + "|" + std::to_string(p.directions) + "|" + std::to_string(p.samples) +
+       "|" + std::to_string(p.sh_bands) + "|" + std::to_string(p.sh_depth) + "|" + std::to_string(p.radius) +
+       "|" + std::to_string(p.candidates) + "|" + std::to_string(p.seed);
+  return s;
+}
+
+gpu::GlObject storage(const std::vector<float>& data) {
+  auto b = gpu::GlObject::create(gpu::GlKind::Buffer);
+  glNamedBufferStorage(b.get(), static_cast<GLsizeiptr>(std::max<size_t>(data.size(), 1) * sizeof(float)),
+                       data.empty() ? nullptr : data.data(), 0);
+  return b;
+}
+
+}  // namespace
+
+SinglePipeline::SinglePipeline(gpu::Gpu& gpu, BakeCache* cache) : gpu_(gpu), cache_(cache) {
+  if (!cache_) {
+    own_cache_ = std::make_unique<BakeCache>();
+    cache_ = own_cache_.get();
+  }
+}
+
+SinglePipeline::~SinglePipeline() {
+  // GL names must be deleted with the context current.
+  if (distance_program_ || positions_) gpu_.gl().make_current();
+}
+
+Plan SinglePipeline::plan(const Scene& scene, const RenderRequest& request) {
+  require_terms(*this, request.terms);
+  SingleSettings s = SingleSettings::read(request.settings);
+  Plan p{name(), request.terms, {}};
+  const bool same = current_.bake && current_.fingerprint == fingerprint(scene, s.bake);
+  p.stages.push_back({"voxelize", !same, same ? "the asset is the one already baked"
+                                              : std::to_string(scene.voxels) + " voxels on the long side"});
+  p.stages.push_back({"bake", !same,
+                      same ? "reusing the loaded bake " + current_.key.substr(0, 12)
+                           : "looked up by content (voxels + settings); baked on a miss: " +
+                                 std::to_string(s.bake.directions) + " directions, " +
+                                 std::to_string(s.bake.samples) + " samples, " +
+                                 std::to_string(s.bake.sh_bands * s.bake.sh_bands) + " SH coefficients of " +
+                                 (s.bake.sh_depth ? "optical depth" : "transmittance")});
+  p.stages.push_back({"depth_peel", true, s.clip_back ? "first and second surface (clip both ends)"
+                                                      : "first surface (the paper's clipping)"});
+  p.stages.push_back({"shade", true, std::to_string(scene.lights.size()) +
+                                         " lights evaluated once per sample, not per fragment"});
+  p.stages.push_back({"splat", true, "one Gaussian per sample integrated along each view ray (erf)"});
+  if (scene.medium.ior != 1.0)
+    p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " +
+                                               std::to_string(scene.medium.ior) + ")"});
+  if (scene.medium.g != 0.0)
+    p.stages.push_back({"phase", true, "Henyey-Greenstein g " + std::to_string(scene.medium.g) +
+                                           " evaluated per sample for its direction to the eye"});
+  p.stages.push_back({"readback", true, "linear RGB to the host"});
+  return p;
+}
+
+BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request, const BakeProgress& progress) {
+  SingleSettings s = SingleSettings::read(request.settings);
+  BakeResult r;
+  r.needed = true;
+  StageClock clock(r.timings);
+  std::string fp = fingerprint(scene, s.bake);
+  if (!current_.bake || current_.fingerprint != fp) {
+    if (progress) progress("voxelize", 0);
+    VoxelGrid grid = voxelize(scene, {.resolution = scene.voxels, .margin = kSingleGridMargin});
+    clock.stop("voxelize");
+    BakeKey key;
+    key.add("pipeline", "single").add("version", kSingleBakeVersion);
+    key.add("dims", std::to_string(grid.nx) + "x" + std::to_string(grid.ny) + "x" + std::to_string(grid.nz));
+    key.add("origin.x", grid.origin.x).add("origin.y", grid.origin.y).add("origin.z", grid.origin.z);
+    key.add("voxel", grid.voxel);
+    key.add_bytes("sigma_s", bytes_of(grid.sigma_s)).add_bytes("sigma_a", bytes_of(grid.sigma_a));
+    key.add_bytes("occupancy", bytes_of(grid.occupancy)).add_bytes("inside", bytes_of(grid.inside));
+    add_params(key, s.bake);
+    std::string hex = key.hex();
+    std::shared_ptr<const SingleBake> product;
+    if (auto bytes = cache_->get(hex)) {
+      try {
+        product = std::make_shared<SingleBake>(SingleBake::deserialize(**bytes));
+        r.cache_hit = true;
+      } catch (const std::exception& e) {
+        spdlog::warn("bake {}: cached product unreadable ({}); baking again", hex.substr(0, 12), e.what());
+      }
+    }
+    if (!product) {
+      auto made = std::make_shared<SingleBake>(bake_single(gpu_.cl(), grid, s.bake, progress));
+      cache_->put(hex, made->serialize());
+      product = std::move(made);
+    }
+    clock.stop(r.cache_hit ? "cache" : "bake");
+    current_ = {fp, hex, std::move(product), false};
+  } else {
+    r.cache_hit = true;
+    clock.stop("cache");
+  }
+  if (progress) progress("done", 1);
+  const SingleBake& b = *current_.bake;
+  r.key = current_.key;
+  r.bake_timings = b.timings;
+  r.stats = {{"samples", b.count},
+             {"directions", b.params.directions},
+             {"sh_coefficients", b.coefficients()},
+             {"sh_of", b.params.sh_depth ? "optical depth" : "transmittance"},
+             {"coverage_mean", b.coverage_mean},
+             {"coverage_spread", b.coverage_spread},
+             {"bytes", b.position.size() * 4 + b.sigma.size() * 4 + b.weight.size() * 4 +
+                           b.sigma_s.size() * 4 + b.sh.size() * 4}};
+  return r;
+}
+
+void SinglePipeline::upload() {
+  const SingleBake& b = *current_.bake;
+  positions_ = storage(b.position);
+  weights_ = storage(b.weight);
+  sigma_s_ = storage(b.sigma_s);
+  sh_ = storage(b.sh);
+  sigmas_ = storage(b.sigma);
+  colors_ = gpu::GlObject::create(gpu::GlKind::Buffer);
+  glNamedBufferStorage(colors_.get(), static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
+                       GL_MAP_READ_BIT);
+  current_.uploaded = true;
+}
+
+std::vector<float> SinglePipeline::read_shaded() const {
+  if (!colors_ || !current_.bake) return {};
+  gpu_.gl().make_current();
+  std::vector<float> out(size_t(current_.bake->count) * 4);
+  glGetNamedBufferSubData(colors_.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(float)), out.data());
+  return out;
+}
+
+RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& request) {
+  RenderResult result;
+  result.plan = plan(scene, request);
+  SingleSettings s = SingleSettings::read(request.settings);
+  BakeResult baked = bake(scene, request);
+  result.timings = baked.timings;
+  StageClock clock(result.timings);
+  gpu_.gl().make_current();
+  if (!distance_program_) {
+    distance_program_ = gpu::build_program("shaders/thickness/distance.vert", "shaders/thickness/distance.frag");
+    shade_program_ = gpu::build_compute_program("shaders/single/shade.comp");
+    splat_program_ = gpu::build_program("shaders/single/splat.vert", "shaders/single/splat.frag");
+    empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
+  }
+  if (!current_.uploaded) upload();
+  const SingleBake& b = *current_.bake;
+
+  MeshBuffers mesh(scene.mesh);
+  CameraMatrices cam = camera_matrices(scene);
+  const Vec3& eye = scene.camera.position;
+  RenderTarget front(scene.width, scene.height), back(scene.width, scene.height);
+  const GLuint dist = distance_program_.get();
+  draw_distance(dist, mesh, front, cam.view, cam.projection, eye, Vec3{}, false, 0);
+  if (s.clip_back) draw_distance(dist, mesh, back, cam.view, cam.projection, eye, Vec3{}, false, front.color_texture());
+  glFinish();
+  clock.stop("depth_peel");
+
+  const GLuint shade = shade_program_.get();
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, positions_.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, weights_.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, sigma_s_.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, sh_.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, colors_.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, sigmas_.get());
+  uniform1i(shade, "count", b.count);
+  uniform1i(shade, "bands", b.params.sh_bands);
+  uniform1i(shade, "depth_mode", b.params.sh_depth ? 1 : 0);
+  uniform3(shade, "eye", eye);
+  glProgramUniform1f(shade, glGetUniformLocation(shade, "g"), float(scene.medium.g));
+  set_light_uniforms(shade, scene.lights);
+  glUseProgram(shade);
+  glDispatchCompute(static_cast<GLuint>((b.count + 63) / 64), 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  glFinish();
+  clock.stop("shade");
+
+  const GLuint splat = splat_program_.get();
+  RenderTarget out(scene.width, scene.height);
+  uniform_matrix(splat, "view_projection", cam.projection * cam.view);
+  set_camera_uniforms(splat, scene);
+  uniform1i(splat, "front", 0);
+  uniform1i(splat, "back", 1);
+  uniform1i(splat, "clip_back", s.clip_back ? 1 : 0);
+  glBindTextureUnit(0, front.color_texture());
+  glBindTextureUnit(1, back.color_texture());
+  out.bind_and_clear(Vec3{});  // the term alone, as the reference renders it
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  glEnable(GL_DEPTH_CLAMP);  // quads of balls near the eye may cross the near plane
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_ONE, GL_ONE);
+  glUseProgram(splat);
+  glBindVertexArray(empty_vao_.get());
+  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, b.count);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  glDisable(GL_BLEND);
+  glDisable(GL_DEPTH_CLAMP);
+  glBindTextureUnit(0, 0);
+  glBindTextureUnit(1, 0);
+  for (GLuint i = 0; i < 6; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+  gpu::check_gl("single splat");
+  glFinish();
+  clock.stop("splat");
+
+  result.image = out.read_color();
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  clock.stop("readback");
+  return result;
+}
+
+}  // namespace scatter

@@ -1,0 +1,58 @@
+// `single`: single scattering inside inhomogeneous materials from baked samples
+// (papers/single-scattering-inhomogeneous.md). The bake (single_bake.hpp) places Gaussian samples
+// carrying spherical harmonics of their direction-dependent optical depth; it is content-addressed
+// by the voxelized medium and the bake settings, and kept in the BakeCache. A frame:
+//   depth_peel  the mesh's first and second surfaces from the eye (distance textures)
+//   shade       per sample (compute shader): weight * sigma_s * psi(to eye) * sum over lights of
+//               E * psi(to light) * phase, so the fragment work does not grow with the lights
+//   splat       per sample a camera-facing quad; per fragment the Gaussian's integral along the
+//               ray between max(ball entry, first surface) and min(ball exit, second surface)
+//               (erf), added into a float target
+//
+// Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 1, radius 0.6,
+// candidates 5, seed 1) and clip_back (1): clip at the second surface (0: the paper's front-only
+// clipping). The term is the single-scattered radiance; the surface, refraction and Fresnel at the
+// boundary are not included (ior is neglected, and the plan says so).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "gpu/gl_objects.hpp"
+#include "pipelines/pipeline.hpp"
+#include "pipelines/single/single_bake.hpp"
+
+namespace scatter {
+
+class SinglePipeline : public Pipeline {
+ public:
+  SinglePipeline(gpu::Gpu& gpu, BakeCache* cache);
+  ~SinglePipeline() override;
+  std::string name() const override { return "single"; }
+  std::vector<Terms> supported_terms() const override { return {Terms::Single}; }
+  Plan plan(const Scene& scene, const RenderRequest& request) override;
+  BakeResult bake(const Scene& scene, const RenderRequest& request, const BakeProgress& progress = {}) override;
+  RenderResult render(const Scene& scene, const RenderRequest& request) override;
+
+  // The product the last bake() or render() used.
+  const SingleBake* current() const { return current_.bake.get(); }
+  // Per-sample colours of the last frame's shade pass (4 floats per sample), for tests.
+  std::vector<float> read_shaded() const;
+
+ private:
+  struct Current {
+    std::string fingerprint, key;
+    std::shared_ptr<const SingleBake> bake;
+    bool uploaded = false;
+  };
+  void upload();
+
+  gpu::Gpu& gpu_;
+  BakeCache* cache_;
+  std::unique_ptr<BakeCache> own_cache_;
+  Current current_;
+  gpu::GlObject distance_program_, shade_program_, splat_program_, empty_vao_;
+  gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_;
+};
+
+}  // namespace scatter

@@ -1,0 +1,49 @@
+#version 450 core
+// Adds one sample's share of equation 3 to the pixel: factor times the integral of its Gaussian
+// w exp(-|x - b|^2 / (2 s^2)) along the view ray between x = max(ball entry, first surface) and
+// y = min(ball exit, second surface) (the second clip, by depth peeling, is optional: the paper
+// clips only against the first), in closed form with erf.
+flat in vec3 center;
+flat in float gauss_sigma;
+flat in vec3 factor;
+
+uniform sampler2D front;  // distance from the eye to the first surface (0 where none)
+uniform sampler2D back;   // ... to the second surface
+uniform int clip_back;
+uniform vec3 eye, forward, right, up;  // right and up scaled by tan(fov / 2) (and aspect)
+uniform vec2 size;
+
+layout(location = 0) out vec4 radiance;
+
+// Abramowitz and Stegun 7.1.26, |error| < 1.5e-7.
+float erf_approx(float x) {
+  float s = sign(x), a = abs(x);
+  float t = 1.0 / (1.0 + 0.3275911 * a);
+  float y = 1.0 - ((((1.061405429 * t - 1.453152027) * t + 1.421413741) * t - 0.284496736) * t + 0.254829592) * t * exp(-a * a);
+  return s * y;
+}
+
+void main() {
+  ivec2 px = ivec2(gl_FragCoord.xy);
+  float ta = texelFetch(front, px, 0).r;
+  if (ta <= 0.0) discard;
+  vec2 s = gl_FragCoord.xy / size * 2.0 - 1.0;
+  vec3 d = normalize(forward + right * s.x + up * s.y);
+  vec3 to = center - eye;
+  float tc = dot(to, d);
+  float h2 = max(dot(to, to) - tc * tc, 0.0);
+  float r2 = 9.0 * gauss_sigma * gauss_sigma;
+  if (h2 >= r2) discard;
+  float half_chord = sqrt(r2 - h2);
+  float x = max(tc - half_chord, ta);
+  float y = tc + half_chord;
+  if (clip_back != 0) {
+    float tb = texelFetch(back, px, 0).r;
+    if (tb > ta) y = min(y, tb);
+  }
+  if (y <= x) discard;
+  float k = 0.70710678 / gauss_sigma;
+  float integral = exp(-h2 / (2.0 * gauss_sigma * gauss_sigma)) * gauss_sigma * 1.25331414 *
+                   (erf_approx((y - tc) * k) - erf_approx((x - tc) * k));
+  radiance = vec4(factor * integral, 0.0);
+}

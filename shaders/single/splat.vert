@@ -1,0 +1,35 @@
+#version 450 core
+// One camera-facing quad per sample (instanced, 4 vertices as a strip) that covers the
+// projection of the sample's ball (radius 3 sigma). A ball around the eye gets the whole screen.
+layout(std430, binding = 0) readonly buffer Positions { float position[]; };
+layout(std430, binding = 5) readonly buffer Sigmas { float sigma[]; };
+layout(std430, binding = 4) readonly buffer Colors { vec4 color[]; };
+
+uniform mat4 view_projection;
+uniform vec3 eye;
+
+flat out vec3 center;
+flat out float gauss_sigma;
+flat out vec3 factor;
+
+void main() {
+  uint i = uint(gl_InstanceID);
+  center = vec3(position[3u * i], position[3u * i + 1u], position[3u * i + 2u]);
+  gauss_sigma = sigma[i];
+  factor = color[i].rgb;
+  vec2 corner = vec2(gl_VertexID & 1, (gl_VertexID >> 1) & 1) * 2.0 - 1.0;
+  float radius = 3.0 * gauss_sigma;
+  vec3 to = center - eye;
+  float dist = length(to);
+  if (dist < radius * 1.05 || dot(factor, factor) == 0.0) {
+    // Inside (or nearly) the ball: cover the screen; or nothing to add: a degenerate quad.
+    gl_Position = dot(factor, factor) == 0.0 ? vec4(0.0, 0.0, 0.0, 1.0) : vec4(corner, 0.0, 1.0);
+    return;
+  }
+  vec3 f = to / dist;
+  vec3 ref = abs(f.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+  vec3 u = normalize(cross(ref, f)), v = cross(f, u);
+  // The cone from the eye tangent to the ball meets the plane through the centre at this radius.
+  float half_size = radius * dist / sqrt(dist * dist - radius * radius);
+  gl_Position = view_projection * vec4(center + (u * corner.x + v * corner.y) * half_size, 1.0);
+}
