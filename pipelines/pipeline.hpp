@@ -104,6 +104,8 @@ class Pipeline {
   virtual Plan plan(const Scene& scene, const RenderRequest& request) = 0;
   // Makes (or finds in the cache) what render() will need for this scene and request's settings.
   virtual BakeResult bake(const Scene&, const RenderRequest&, const BakeProgress& = {}) { return {}; }
+  // The stages bake() reports progress for, each with its rough share of the whole bake.
+  virtual std::vector<std::pair<std::string, double>> bake_stages() const { return {}; }
   virtual RenderResult render(const Scene& scene, const RenderRequest& request) = 0;
 };
 

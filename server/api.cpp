@@ -1,8 +1,10 @@
 #include "server/api.hpp"
 
 #include <algorithm>
+#include <fstream>
 #include <map>
 
+#include "bake/cache.hpp"
 #include "gpu/embedded_sources.hpp"
 #include "gpu/error.hpp"
 #include "protocol/json_reader.hpp"
@@ -72,6 +74,10 @@ HttpResponse Api::route(const HttpRequest& request, std::string& route_name) {
   static const std::map<std::string, std::string> kMethods = {
       {"/api/health", "GET"}, {"/api/pipelines", "GET"}, {"/api/devices", "GET"},
       {"/api/render", "POST"}, {"/metrics", "GET"}};
+  if (path == "/api/bakes" || path.rfind("/api/bakes/", 0) == 0) {
+    route_name = "/api/bakes";
+    return bakes(request, path);
+  }
   auto it = kMethods.find(path);
   if (it != kMethods.end()) {
     route_name = path;
@@ -81,11 +87,24 @@ HttpResponse Api::route(const HttpRequest& request, std::string& route_name) {
     if (path == "/api/pipelines") return json_response({{"pipelines", pipeline_names()}});
     if (path == "/api/devices") return devices();
     if (path == "/api/render") return render(request.body);
-    return {200, "text/plain; version=0.0.4",
-            metrics_.text(queue_.depth()) +
-                "# HELP scatter_sessions Live WebSocket sessions.\n# TYPE scatter_sessions gauge\n"
-                "scatter_sessions " + std::to_string(sessions_.load()) + "\n",
-            {}};
+    std::string text = metrics_.text(queue_.depth()) +
+                       "# HELP scatter_sessions Live WebSocket sessions.\n# TYPE scatter_sessions gauge\n"
+                       "scatter_sessions " + std::to_string(sessions_.load()) + "\n";
+    text += "# HELP scatter_bakes Bake jobs by state.\n# TYPE scatter_bakes gauge\n";
+    for (const char* state : {"queued", "running", "done", "failed", "cancelled"}) {
+      auto counts = bakes_.counts();
+      text += std::string("scatter_bakes{state=\"") + state + "\"} " + std::to_string(counts[state]) + "\n";
+    }
+    if (BakeCache* cache = queue_.cache()) {
+      CacheStats c = cache->stats();
+      text += "# HELP scatter_bake_cache_lookups_total Bake cache lookups by outcome.\n"
+              "# TYPE scatter_bake_cache_lookups_total counter\n";
+      text += "scatter_bake_cache_lookups_total{result=\"memory_hit\"} " + std::to_string(c.memory_hits) + "\n";
+      text += "scatter_bake_cache_lookups_total{result=\"disk_hit\"} " + std::to_string(c.disk_hits) + "\n";
+      text += "scatter_bake_cache_lookups_total{result=\"miss\"} " + std::to_string(c.misses) + "\n";
+      text += "scatter_bake_cache_lookups_total{result=\"corrupt\"} " + std::to_string(c.corrupt) + "\n";
+    }
+    return {200, "text/plain; version=0.0.4", text, {}};
   }
   // The browser client (web/), compiled into the binary.
   static const std::map<std::string, std::pair<std::string, std::string>> kStatic = {
@@ -195,6 +214,76 @@ RenderResult Api::render_on_queue(RenderQueue& queue, Metrics& metrics, const Sc
     return result;
   });
   return job.get();
+}
+
+// What a bake depends on in a scene: the solid, the medium and the grid resolution (not the camera,
+// lights or image size), as canonical JSON.
+nlohmann::json bake_identity(const nlohmann::json& scene) {
+  nlohmann::json id = nlohmann::json::object();
+  for (const char* k : {"mesh", "medium", "voxels"})
+    if (scene.is_object() && scene.contains(k)) id[k] = scene[k];
+  return id;
+}
+
+HttpResponse Api::create_bake(const std::string& body) {
+  nlohmann::json request = nlohmann::json::parse(body, nullptr, false);
+  if (request.is_discarded()) throw ValidationError("body", "is not valid JSON");
+  if (request.is_object() && !request.contains("pipeline")) request["pipeline"] = "single";
+  JsonObject r(request, "");
+  RenderSpec spec = read_render_spec(r, request, options_);
+  r.finish();
+  // The scene's JSON, for the job's identity.
+  nlohmann::json scene_json;
+  if (request.contains("scene")) {
+    scene_json = request["scene"];
+  } else {
+    std::ifstream in(options_.scenes_dir / (request["scene_name"].get<std::string>() + ".json"));
+    scene_json = nlohmann::json::parse(in, nullptr, false);
+  }
+  // Settings are checked now, so that a typo is a 400 rather than a failed job.
+  auto scene = std::make_shared<const Scene>(std::move(spec.scene));
+  const std::string pipeline = spec.pipeline;
+  const Settings settings = spec.settings;
+  auto stages = queue_.submit([&](RenderQueue::Context& c) {
+    Pipeline& p = c.pipeline(pipeline);
+    p.plan(*scene, {p.supported_terms().front(), settings, nullptr});
+    return p.bake_stages();
+  }).get();
+  nlohmann::json identity = {{"pipeline", pipeline}, {"settings", settings}, {"scene", bake_identity(scene_json)}};
+  bool created = false;
+  auto job = bakes_.submit(identity.dump(), pipeline, stages, [&](std::shared_ptr<BakeJob> j) {
+    queue_.submit([j, scene, pipeline, settings](RenderQueue::Context& c) {
+      j->run([&](const BakeProgress& progress) {
+        Pipeline& p = c.pipeline(pipeline);
+        return p.bake(*scene, {p.supported_terms().front(), settings, nullptr}, progress);
+      });
+      return 0;
+    });
+  }, &created);
+  HttpResponse response = json_response(job->status(), created ? 202 : 200);
+  response.headers.push_back({"Location", "/api/bakes/" + job->id()});
+  return response;
+}
+
+HttpResponse Api::bakes(const HttpRequest& request, const std::string& path) {
+  if (path == "/api/bakes") {
+    if (request.method == "POST") return create_bake(request.body);
+    if (request.method == "GET") {
+      nlohmann::json list = nlohmann::json::array();
+      for (const auto& j : bakes_.list()) list.push_back(j->status());
+      return json_response({{"bakes", list}});
+    }
+    return error(405, request.method + " is not allowed on /api/bakes: use POST or GET");
+  }
+  std::string id = path.substr(std::string("/api/bakes/").size());
+  auto job = bakes_.find(id);
+  if (!job) return error(404, "no bake job " + id);
+  if (request.method == "GET") return json_response(job->status());
+  if (request.method == "DELETE") {
+    if (!job->cancel()) return error(409, "bake job " + id + " has already " + (job->state() == BakeJob::State::Done ? "finished" : to_string(job->state())));
+    return json_response(job->status(), 202);
+  }
+  return error(405, request.method + " is not allowed on /api/bakes/{id}: use GET or DELETE");
 }
 
 HttpResponse Api::render(const std::string& body) {

@@ -7,9 +7,14 @@
 //   POST /api/render     {"scene": {...} | "scene_name": "bunny", "pipeline": "auto",
 //                         "terms": "single", "format": "png"|"jpg"|"exr"|"json",
 //                         "settings": {"spp": 64}, "exposure": 1}
+//   POST   /api/bakes       {"scene": {...} | "scene_name", "pipeline": "single", "settings": {...}}
+//                           202 and the job's status (a new job), or 200 and the existing job's
+//   GET    /api/bakes       {"bakes": [status, ...]}
+//   GET    /api/bakes/{id}  {"id", "state", "stage", "progress" 0-1, "timings_ms", "error", ...}
+//   DELETE /api/bakes/{id}  cancels a queued or running job (202); 409 once it has finished
 //   GET  /metrics        Prometheus text
 //
-// Errors are JSON {"error": "...", "field": "..."} with 400, 401, 404, 405, 413 or 503.
+// Errors are JSON {"error": "...", "field": "..."} with 400, 401, 404, 405, 409, 413 or 503.
 #pragma once
 
 #include <atomic>
@@ -18,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "bake/jobs.hpp"
 #include "protocol/json_reader.hpp"
 #include "scene/scene.hpp"
 #include "server/metrics.hpp"
@@ -87,12 +93,15 @@ class Api {
   HttpResponse health();
   HttpResponse devices();
   HttpResponse render(const std::string& body);
+  HttpResponse bakes(const HttpRequest& request, const std::string& path);
+  HttpResponse create_bake(const std::string& body);
 
   ApiOptions options_;
   RenderQueue& queue_;
   Metrics& metrics_;
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
   std::atomic<int> sessions_{0};
+  BakeJobs bakes_;
 };
 
 }  // namespace scatter::server

@@ -2,8 +2,8 @@
 
 namespace scatter::server {
 
-RenderQueue::RenderQueue(gpu::GpuOptions options)
-    : options_(std::move(options)), thread_([this] { run(); }) {}
+RenderQueue::RenderQueue(gpu::GpuOptions options, BakeCache* cache)
+    : options_(std::move(options)), cache_(cache), thread_([this] { run(); }) {}
 
 RenderQueue::~RenderQueue() {
   {
@@ -22,12 +22,12 @@ size_t RenderQueue::depth() const {
 
 Pipeline& RenderQueue::Context::pipeline(const std::string& name) {
   auto& p = pipelines[name];
-  if (!p) p = make_pipeline(name, gpu);
+  if (!p) p = make_pipeline(name, gpu, cache);
   return *p;
 }
 
 void RenderQueue::run() {
-  context_ = std::make_unique<Context>(Context{gpu::Gpu(options_), {}});
+  context_ = std::make_unique<Context>(Context{gpu::Gpu(options_), cache_, {}});
   for (;;) {
     std::function<void()> job;
     {

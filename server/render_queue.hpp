@@ -22,11 +22,12 @@ class RenderQueue {
   // What a job gets: the GPU and a cache of pipelines by name (made on first use).
   struct Context {
     gpu::Gpu gpu;
+    BakeCache* cache = nullptr;  // shared by the pipelines that bake
     std::map<std::string, std::unique_ptr<Pipeline>> pipelines;
     Pipeline& pipeline(const std::string& name);
   };
 
-  explicit RenderQueue(gpu::GpuOptions options);
+  explicit RenderQueue(gpu::GpuOptions options, BakeCache* cache = nullptr);
   ~RenderQueue();  // finishes the running job, drops the rest, joins the thread
   RenderQueue(const RenderQueue&) = delete;
   RenderQueue& operator=(const RenderQueue&) = delete;
@@ -37,12 +38,14 @@ class RenderQueue {
   auto submit(F job) -> std::future<decltype(job(std::declval<Context&>()))>;
 
   size_t depth() const;
+  BakeCache* cache() const { return cache_; }
 
  private:
   void run();
 
   // Made and destroyed on the render thread: GL objects must die where their context is current.
   gpu::GpuOptions options_;
+  BakeCache* cache_;
   std::unique_ptr<Context> context_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;

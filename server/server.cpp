@@ -7,8 +7,11 @@
 namespace scatter::server {
 
 Server::Server(ServerOptions options)
-    : options_(std::move(options)),
-      queue_(options_.gpu),
+    : options_([&] {
+        if (!options.cache) options.cache = std::make_shared<BakeCache>();
+        return std::move(options);
+      }()),
+      queue_(options_.gpu, options_.cache.get()),
       api_([&] {
         ApiOptions a = options_.api;
         a.max_message_bytes = options_.max_upload_mb << 20;

@@ -7,6 +7,7 @@
 #include <thread>
 #include <vector>
 
+#include "bake/cache.hpp"
 #include "server/api.hpp"
 
 namespace scatter::server {
@@ -19,6 +20,7 @@ struct ServerOptions {
   int workers = 4;
   ApiOptions api;
   gpu::GpuOptions gpu;
+  std::shared_ptr<BakeCache> cache;  // bake products; null: a memory-only cache
 };
 
 class Server {

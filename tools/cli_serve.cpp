@@ -1,10 +1,11 @@
 // scatterd serve [--bind ADDR] [--port N] [--token T] [--scenes-dir DIR] [--max-upload-mb N]
-//                [--max-image N] [--device D]
+//                [--max-image N] [--max-sessions N] [--device D] [--cache-dir DIR]
 #include <spdlog/spdlog.h>
 
 #include <iostream>
 
 #include "server/server.hpp"
+#include "tools/cache_option.hpp"
 #include "tools/commands.hpp"
 
 #ifndef SCATTER_SCENES_DIR
@@ -17,12 +18,14 @@ namespace {
 struct ServeOptions {
   server::ServerOptions server;
   std::string scenes_dir = SCATTER_SCENES_DIR;
+  std::string cache_dir;
 };
 
 int run_serve(ServeOptions o) {
   o.server.api.scenes_dir = o.scenes_dir;
   if (!std::filesystem::is_directory(o.server.api.scenes_dir))
     throw std::runtime_error("--scenes-dir: " + o.scenes_dir + " is not a folder");
+  o.server.cache = open_cache(o.cache_dir);
   server::Server server(o.server);
   std::cout << "scatterd: serving on http://" << o.server.bind << ":" << server.port() << "/"
             << std::endl;
@@ -48,6 +51,7 @@ Handler add_serve_command(CLI::App& app) {
   cmd->add_option("--max-sessions", o->server.api.max_sessions, "Live WebSocket sessions at once")
       ->capture_default_str()->check(CLI::Range(1, 10000));
   cmd->add_option("--device", o->server.gpu.cl_device, "OpenCL device: P:D or part of its name");
+  add_cache_dir_option(cmd, o->cache_dir);
   return [o] { return run_serve(*o); };
 }
 

@@ -31,9 +31,57 @@ function send(msg, timed = true) {
   }
 }
 
+// Settings per pipeline for each quality; "normal" is each pipeline's defaults.
+const QUALITY = {
+  single: { draft: { samples: 5000, directions: 64 }, normal: {}, high: { samples: 100000, directions: 256 } },
+  reference: { draft: { step: 0.5 }, normal: {}, high: { step: 0.125 } },
+  thickness: { draft: { steps: 12, shadow_size: 512 }, normal: {}, high: { steps: 96, shadow_size: 2048 } },
+};
+const settingsFor = (pipeline) => (QUALITY[pipeline] || {})[$('quality').value] || {};
+
 function hello() {
-  send({ type: 'hello', scene_name: $('scene').value, pipeline: $('pipeline').value, format: 'jpg',
-         terms: $('pipeline').value === 'surface' ? 'surface' : 'single' });
+  const pipeline = $('pipeline').value;
+  send({ type: 'hello', scene_name: $('scene').value, pipeline, format: 'jpg',
+         terms: pipeline === 'surface' ? 'surface' : 'single', settings: settingsFor(pipeline) });
+}
+
+// REST calls carry the page's token, if it was opened with ?token=.
+function api(path, options = {}) {
+  const token = new URLSearchParams(location.search).get('token');
+  const headers = { 'Content-Type': 'application/json', ...(token ? { Authorization: 'Bearer ' + token } : {}) };
+  return fetch(path, { ...options, headers }).then(async (r) => ({ status: r.status, body: await r.json() }));
+}
+
+// Starts (or finds) the bake job for this scene and quality and follows it to the end.
+async function bake() {
+  $('bake').disabled = true;
+  const bar = $('bake-progress'), label = $('bake-status');
+  try {
+    let r = await api('/api/bakes', { method: 'POST', body: JSON.stringify(
+      { scene_name: $('scene').value, pipeline: 'single', settings: settingsFor('single') }) });
+    if (r.status >= 400) throw new Error(r.body.error);
+    const id = r.body.id;
+    for (;;) {
+      const job = r.body;
+      bar.value = job.progress;
+      label.textContent = job.state === 'running' ? `${job.stage} ${(100 * job.progress).toFixed(0)}%` : job.state;
+      if (job.state === 'done') {
+        label.textContent = `done${job.cache_hit ? ' (cached)' : ''} · ${job.stats.samples} samples`;
+        break;
+      }
+      if (job.state === 'failed' || job.state === 'cancelled') {
+        label.textContent = job.state + (job.error ? ': ' + job.error : '');
+        break;
+      }
+      await new Promise((ok) => setTimeout(ok, 250));
+      r = await api('/api/bakes/' + id);
+      if (r.status >= 400) throw new Error(r.body.error);
+    }
+  } catch (e) {
+    label.textContent = 'error: ' + e.message;
+  } finally {
+    $('bake').disabled = false;
+  }
 }
 
 function connect() {
@@ -102,6 +150,8 @@ canvas.addEventListener('wheel', (e) => {
 }, { passive: false });
 $('scene').addEventListener('change', hello);
 $('pipeline').addEventListener('change', hello);
+$('quality').addEventListener('change', hello);
+$('bake').addEventListener('click', bake);
 $('light-color').addEventListener('input', () => send(lightsMessage()));
 $('light-intensity').addEventListener('input', () => send(lightsMessage()));
 connect();

@@ -181,7 +181,8 @@ SingleBake SingleBake::deserialize(const std::string& bytes) {
   return b;
 }
 
-std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<Vec3>& dirs) {
+std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<Vec3>& dirs,
+                                const std::function<void(double)>& progress) {
   const size_t voxels = grid.count();
   std::vector<float> sigma(voxels);
   for (size_t v = 0; v < voxels; ++v)
@@ -194,7 +195,7 @@ std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const
   const int dims[3] = {grid.nx, grid.ny, grid.nz};
   const double d_omega = 4 * std::numbers::pi / double(dirs.size());
   auto& queue = cl.queue();
-  std::vector<cl::Buffer> keep;  // group buffers stay alive until the queue drains
+  int groups_done = 0;
   for (int axis = 0; axis < 3; ++axis)
     for (int sign : {1, -1}) {
       std::vector<float> params, moments;
@@ -208,7 +209,10 @@ std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const
         params.insert(params.end(), {float(c[ua] / a), float(c[va] / a), float(grid.voxel / a), 0.f});
         moments.insert(moments.end(), {float(w.x * d_omega), float(w.y * d_omega), float(w.z * d_omega), 0.f});
       }
-      if (params.empty()) continue;
+      if (params.empty()) {
+        ++groups_done;
+        continue;
+      }
       const int count = static_cast<int>(params.size() / 4);
       const int n = dims[axis];
       const int nu = axis == 0 ? grid.ny : grid.nx, nv = axis == 2 ? grid.ny : grid.nz;
@@ -226,7 +230,7 @@ std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const
         queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(nu), size_t(nv)));
       }
       queue.finish();
-      keep.clear();
+      if (progress) progress(++groups_done / 6.0);
     }
   std::vector<float> out(3 * voxels);
   queue.enqueueReadBuffer(moment, CL_TRUE, 0, out.size() * sizeof(float), out.data());
@@ -297,7 +301,7 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   // 1. Direction-dependent optical depth, folded into its first moment.
   report("ddod", 0);
   const std::vector<Vec3> dirs = sphere_directions(p.directions);
-  std::vector<float> moment = first_moment(cl, g, dirs);
+  std::vector<float> moment = first_moment(cl, g, dirs, [&](double f) { report("ddod", f); });
   clock.stop("ddod");
   report("ddod", 1);
 
@@ -462,7 +466,7 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   std::vector<float> basis(dirs.size() * nc);
   for (size_t k = 0; k < dirs.size(); ++k) sh_basis(dirs[k], p.sh_bands, &basis[k * nc]);
   bake.sh.assign(size_t(n) * 3 * nc, 0.f);
-  const size_t chunk = std::max<size_t>(1, (16u << 20) / (dirs.size() * 3));
+  const size_t chunk = std::clamp<size_t>((16u << 20) / (dirs.size() * 3), 1, std::max(1, n / 8));
   const double w = 4 * std::numbers::pi / double(dirs.size());
   for (size_t first = 0; first < size_t(n); first += chunk) {
     size_t last = std::min(size_t(n), first + chunk);

@@ -67,7 +67,9 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& grid, const SingleBa
                        const BakeProgress& progress = {});
 
 // The pieces, for tests. First moment T per voxel (3 floats) for the given directions.
-std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<Vec3>& dirs);
+// `progress` (optional) hears the fraction of direction groups done.
+std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<Vec3>& dirs,
+                                const std::function<void(double)>& progress = {});
 // |div T| per voxel, zero where the voxel holds no medium.
 std::vector<float> divergence(const VoxelGrid& grid, const std::vector<float>& moment);
 // Optical depth per (sample, direction, channel) from the sample to the grid's boundary.

@@ -1,15 +1,19 @@
 // The web client in a real browser: Debian's chromium driven by playwright-core. Starts scatterd
 // on a free loopback port, loads the page, waits for a frame, drags to orbit and sees the view
-// change, and saves a screenshot. Run by CTest: node --test client.test.mjs (SCATTERD, OUT_DIR set).
+// change, bakes the single pipeline's samples and watches the progress bar reach 100 %, renders
+// with them, and saves a screenshot. Run by CTest: node --test client.test.mjs (SCATTERD, OUT_DIR set).
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn } from 'node:child_process';
-import { mkdirSync } from 'node:fs';
+import { mkdirSync, rmSync } from 'node:fs';
 import { chromium } from 'playwright-core';
 
 function startDaemon() {
   return new Promise((resolve, reject) => {
-    const proc = spawn(process.env.SCATTERD, ['serve', '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
+    const cache = `${process.env.OUT_DIR || '.'}/browser-bake-cache`;
+    rmSync(cache, { recursive: true, force: true });
+    const proc = spawn(process.env.SCATTERD, ['serve', '--port', '0', '--cache-dir', cache],
+                       { stdio: ['ignore', 'pipe', 'pipe'] });
     const timer = setTimeout(() => reject(new Error('scatterd did not start')), 20000);
     proc.stdout.on('data', (d) => {
       const m = /serving on (http:\/\/[^\s]+)/.exec(String(d));
@@ -19,7 +23,7 @@ function startDaemon() {
   });
 }
 
-test('the page streams frames and orbits on drag', { timeout: 120000 }, async () => {
+test('the page streams frames, orbits on drag and bakes', { timeout: 240000 }, async () => {
   const { proc, url } = await startDaemon();
   const browser = await chromium.launch({
     executablePath: '/usr/bin/chromium',
@@ -55,6 +59,28 @@ test('the page streams frames and orbits on drag', { timeout: 120000 }, async ()
     const after = await pixels();
     assert.notEqual(after, before, 'the view changed after the drag');
     assert.match(await page.textContent('#stages'), /surface: .*raster/);
+
+    // Bake the single pipeline's samples at draft quality: the bar climbs to 100 %.
+    await page.selectOption('#quality', 'draft');
+    const seen = [];
+    await page.exposeFunction('recordProgress', (v) => seen.push(v));
+    await page.evaluate(() => {
+      const bar = document.getElementById('bake-progress');
+      new MutationObserver(() => window.recordProgress(bar.value)).observe(bar, { attributes: true });
+      setInterval(() => window.recordProgress(bar.value), 100);
+    });
+    await page.click('#bake');
+    await page.waitForFunction(() => document.getElementById('bake-status').textContent.startsWith('done'),
+                               null, { timeout: 120000 });
+    assert.equal(await page.$eval('#bake-progress', (b) => b.value), 1);
+    assert.ok(seen.some((v) => v > 0 && v < 1), `the bar moved through intermediate values: ${seen}`);
+    // The baked pipeline now renders frames straight away.
+    const m = await frames();
+    await page.selectOption('#pipeline', 'single');
+    await page.waitForFunction((k) => Number(document.getElementById('view').dataset.frames) > k &&
+                                      /single:/.test(document.getElementById('stages').textContent), m,
+                               { timeout: 60000 });
+    assert.match(await page.textContent('#stages'), /single: .*splat/);
     const out = process.env.OUT_DIR || '.';
     mkdirSync(out, { recursive: true });
     await page.screenshot({ path: `${out}/browser-client.png` });
