@@ -15,8 +15,10 @@
 //              rescaled (4 passes) so the Gaussians sum to one at the voxel centres inside; each
 //              sample's sigma_s is the Gaussian-weighted mean of the medium around it
 //   sh         exact optical depth per channel from every sample along every direction (DDA),
-//              projected onto `sh_bands`^2 real spherical harmonics: of exp(-tau) (the paper) or of
-//              tau itself, clamped to 20, exponentiated when rendering (`sh_depth` 1)
+//              projected onto `sh_bands`^2 real spherical harmonics: of exp(-tau) (the paper, the
+//              default) or of tau itself, clamped to 20, exponentiated when rendering (`sh_depth`
+//              1). The second loses: the ringing of a band-limited tau near a face, clamped at
+//              zero, darkens the directions that matter most (docs/BENCHMARKS.md)
 #pragma once
 
 #include <functional>
@@ -37,7 +39,7 @@ struct SingleBakeParams {
   int directions = 128;
   int samples = 25000;
   int sh_bands = 5;        // 2..5: 4..25 coefficients per channel ("sh_order")
-  bool sh_depth = true;    // project the optical depth (true) or the transmittance (false)
+  bool sh_depth = false;   // project the optical depth (true) or the transmittance (false)
   double radius = 0.6;     // Gaussian sigma / local spacing
   int candidates = 5;      // candidates per sample for the elimination
   uint32_t seed = 1;

@@ -14,7 +14,7 @@ namespace scatter {
 namespace {
 
 // Bump when the bake's results change, so old cache entries are not reused.
-constexpr const char* kSingleBakeVersion = "single-1";
+constexpr const char* kSingleBakeVersion = "single-2";
 
 struct SingleSettings {
   SingleBakeParams bake;
