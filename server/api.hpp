@@ -7,6 +7,12 @@
 //   POST /api/render     {"scene": {...} | "scene_name": "bunny", "pipeline": "auto",
 //                         "terms": "single", "format": "png"|"jpg"|"exr"|"json",
 //                         "settings": {"spp": 64}, "exposure": 1}
+//   POST   /api/assets?kind=mesh&format=obj|ply|stl|glb|off   the file as the body
+//   POST   /api/assets?kind=grid&dims=X,Y,Z&bounds=x0,y0,z0,x1,y1,z1   raw float32, x fastest
+//                           201 {"id" (SHA-256 of the content), "kind", "bytes", ...}; 200 if known;
+//                           scenes then name it: "mesh": {"asset": ID}, density {"type": "grid",
+//                           "asset": ID}
+//   GET    /api/assets      {"assets": [{"id", "kind", "bytes", ...}]}
 //   POST   /api/bakes       {"scene": {...} | "scene_name", "pipeline": "single", "settings": {...}}
 //                           202 and the job's status (a new job), or 200 and the existing job's
 //   GET    /api/bakes       {"bakes": [status, ...]}
@@ -38,6 +44,7 @@ struct ApiOptions {
   size_t max_message_bytes = 64 << 20;  // largest WebSocket message
   int max_sessions = 16;                // live WebSocket sessions at once
   int idle_refine_ms = 200;             // a still view is re-rendered at full size after this
+  std::filesystem::path assets_dir;     // uploaded assets; empty: uploads are refused (503)
 };
 
 struct HttpRequest {
@@ -81,7 +88,8 @@ class Api {
     double exposure = 1.0;
   };
   // Reads the fields of `r` (an object over `json`): scene or scene_name, pipeline, terms, format,
-  // settings, exposure. Leaves other fields for the caller; throws ValidationError.
+  // settings, exposure. Leaves other fields for the caller; throws ValidationError. An inline
+  // scene's "asset" fields become the uploaded files' paths.
   static RenderSpec read_render_spec(JsonObject& r, const nlohmann::json& json, const ApiOptions& options);
   // Renders on the render thread and records the metrics; waits for the result.
   static RenderResult render_on_queue(RenderQueue& queue, Metrics& metrics, const Scene& scene,
@@ -94,6 +102,7 @@ class Api {
   HttpResponse devices();
   HttpResponse render(const std::string& body);
   HttpResponse bakes(const HttpRequest& request, const std::string& path);
+  HttpResponse assets(const HttpRequest& request);
   HttpResponse create_bake(const std::string& body);
 
   ApiOptions options_;

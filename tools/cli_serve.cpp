@@ -26,6 +26,7 @@ int run_serve(ServeOptions o) {
   if (!std::filesystem::is_directory(o.server.api.scenes_dir))
     throw std::runtime_error("--scenes-dir: " + o.scenes_dir + " is not a folder");
   o.server.cache = open_cache(o.cache_dir);
+  if (!o.server.cache->dir().empty()) o.server.api.assets_dir = o.server.cache->dir() / "assets";
   server::Server server(o.server);
   std::cout << "scatterd: serving on http://" << o.server.bind << ":" << server.port() << "/"
             << std::endl;
