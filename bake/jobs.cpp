@@ -18,7 +18,10 @@ std::string to_string(BakeJob::State s) {
 }
 
 BakeJob::BakeJob(std::string id, std::string pipeline, std::vector<std::pair<std::string, double>> stage_weights)
-    : id_(std::move(id)), pipeline_(std::move(pipeline)), weights_(std::move(stage_weights)) {}
+    : id_(std::move(id)), pipeline_(std::move(pipeline)), weights_(std::move(stage_weights)) {
+  static std::atomic<uint64_t> next{0};
+  serial_ = next++;
+}
 
 void BakeJob::report(const std::string& stage, double fraction) {
   if (cancel_) throw BakeCancelled();
@@ -74,6 +77,10 @@ bool BakeJob::cancel() {
   std::lock_guard lock(mutex_);
   if (state_ != State::Queued && state_ != State::Running) return false;
   cancel_ = true;
+  if (state_ == State::Queued) {  // it will not start: say so now
+    state_ = State::Cancelled;
+    stage_ = "cancelled";
+  }
   return true;
 }
 
@@ -125,12 +132,30 @@ std::shared_ptr<BakeJob> BakeJobs::submit(const std::string& identity, const std
   {
     std::lock_guard lock(mutex_);
     auto& slot = jobs_[id];
-    if (slot && slot->state() != BakeJob::State::Failed && slot->state() != BakeJob::State::Cancelled) {
+    // A job that failed, was cancelled or is being cancelled is replaced: asking again means again.
+    if (slot && !slot->cancel_requested() && slot->state() != BakeJob::State::Failed &&
+        slot->state() != BakeJob::State::Cancelled) {
       if (created) *created = false;
       return slot;
     }
+    int active = 0;
+    for (const auto& [other, j] : jobs_)
+      if (j && j != slot && !j->finished()) ++active;
+    if (active >= kMaxActive) {
+      if (!slot) jobs_.erase(id);
+      throw Busy();
+    }
     slot = std::make_shared<BakeJob>(id, pipeline, std::move(stage_weights));
     job = slot;
+    // Forget the oldest finished jobs beyond kMaxKept (their products stay in the cache).
+    while (jobs_.size() > kMaxKept) {
+      auto oldest = jobs_.end();
+      for (auto it = jobs_.begin(); it != jobs_.end(); ++it)
+        if (it->second->finished() && (oldest == jobs_.end() || it->second->serial() < oldest->second->serial()))
+          oldest = it;
+      if (oldest == jobs_.end()) break;
+      jobs_.erase(oldest);
+    }
   }
   if (created) *created = true;
   start(job);

@@ -41,6 +41,8 @@ class BakeJob {
   bool cancel();
   State state() const;
   bool finished() const;
+  bool cancel_requested() const { return cancel_; }
+  uint64_t serial() const { return serial_; }  // creation order
   nlohmann::json status() const;  // id, state, pipeline, stage, progress, timings, error, ...
 
  private:
@@ -56,14 +58,22 @@ class BakeJob {
   double progress_ = 0;
   std::optional<BakeResult> result_;
   double seconds_ = 0;
+  uint64_t serial_ = 0;
 };
 
 std::string to_string(BakeJob::State s);
 
 class BakeJobs {
  public:
+  static constexpr int kMaxActive = 8;      // queued or running at once; more: Busy
+  static constexpr size_t kMaxKept = 256;   // job records kept; the oldest finished go first
+  struct Busy : std::runtime_error {
+    Busy() : std::runtime_error("too many bakes queued or running; try again when one finishes") {}
+  };
+
   // The job for `identity` (what is baked: asset, pipeline, settings): the existing one unless it
-  // failed or was cancelled, else a new one, which `start` must arrange to run. `created` says which.
+  // failed or was cancelled (or is being cancelled), else a new one, which `start` must arrange to
+  // run. `created` says which. Throws Busy when kMaxActive jobs are queued or running.
   std::shared_ptr<BakeJob> submit(const std::string& identity, const std::string& pipeline,
                                   std::vector<std::pair<std::string, double>> stage_weights,
                                   const std::function<void(std::shared_ptr<BakeJob>)>& start, bool* created);

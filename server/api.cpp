@@ -123,6 +123,8 @@ HttpResponse Api::handle(const HttpRequest& request) {
     r = error(400, e.what(), e.field());
   } catch (const gpu::GpuError& e) {
     r = error(503, e.what());
+  } catch (const BakeJobs::Busy& e) {
+    r = error(503, e.what());
   } catch (const std::exception& e) {
     // A bad request must never take the daemon down; report and go on.
     r = error(500, std::string("internal error: ") + e.what());
@@ -415,15 +417,19 @@ HttpResponse Api::create_bake(const std::string& body) {
     std::ifstream in(options_.scenes_dir / (request["scene_name"].get<std::string>() + ".json"));
     scene_json = nlohmann::json::parse(in, nullptr, false);
   }
-  // Settings are checked now, so that a typo is a 400 rather than a failed job.
   auto scene = std::make_shared<const Scene>(std::move(spec.scene));
   const std::string pipeline = spec.pipeline;
   const Settings settings = spec.settings;
-  auto stages = queue_.submit([&](RenderQueue::Context& c) {
-    Pipeline& p = c.pipeline(pipeline);
-    p.plan(*scene, {p.supported_terms().front(), settings, nullptr});
-    return p.bake_stages();
-  }).get();
+  // Checked here on the network thread with a pipeline of its own (plan() needs no GPU), so that a
+  // typo is a 400 and a POST never waits behind a running bake on the render thread.
+  std::vector<std::pair<std::string, double>> stages;
+  {
+    gpu::Gpu unused;  // contexts are made on first use, and plan() makes none
+    auto p = make_pipeline(pipeline, unused);
+    p->plan(*scene, {p->supported_terms().front(), settings, nullptr});
+    stages = p->bake_stages();
+  }
+  if (stages.empty()) throw ValidationError("pipeline", "pipeline " + pipeline + " needs no bake");
   nlohmann::json identity = {{"pipeline", pipeline}, {"settings", settings}, {"scene", bake_identity(scene_json)}};
   bool created = false;
   auto job = bakes_.submit(identity.dump(), pipeline, stages, [&](std::shared_ptr<BakeJob> j) {

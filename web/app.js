@@ -49,7 +49,12 @@ function hello() {
 function api(path, options = {}) {
   const token = new URLSearchParams(location.search).get('token');
   const headers = { 'Content-Type': 'application/json', ...(token ? { Authorization: 'Bearer ' + token } : {}) };
-  return fetch(path, { ...options, headers }).then(async (r) => ({ status: r.status, body: await r.json() }));
+  return fetch(path, { ...options, headers }).then(async (r) => {
+    const text = await r.text();
+    let body;
+    try { body = JSON.parse(text); } catch { body = { error: `${r.status} ${r.statusText}` }; }
+    return { status: r.status, body };
+  });
 }
 
 // Starts (or finds) the bake job for this scene and quality and follows it to the end.
@@ -66,7 +71,9 @@ async function bake() {
       bar.value = job.progress;
       label.textContent = job.state === 'running' ? `${job.stage} ${(100 * job.progress).toFixed(0)}%` : job.state;
       if (job.state === 'done') {
-        label.textContent = `done${job.cache_hit ? ' (cached)' : ''} · ${job.stats.samples} samples`;
+        label.textContent = `done${job.cache_hit ? ' (cached)' : ''}` +
+                            (job.stats && job.stats.samples ? ` · ${job.stats.samples} samples` : '');
+        if ($('pipeline').value === 'single') hello();  // the view picks the baked samples up
         break;
       }
       if (job.state === 'failed' || job.state === 'cancelled') {

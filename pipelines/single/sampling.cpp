@@ -55,7 +55,7 @@ EliminationResult eliminate_samples(const std::vector<Vec3>& candidates, const s
   if (q.size() != candidates.size()) throw std::invalid_argument("sample elimination: one radius per candidate");
   EliminationResult result;
   // Largest Poisson radius for `target` points in 3D (Yuksel's r_max, from the densest packing),
-  // and his lower clamp, which keeps very close pairs from dominating the weights.
+  // and his lower clamp r_min (weight limiting), which keeps very close pairs from dominating.
   const double r_max = std::cbrt(volume / (4 * std::sqrt(2.0) * target));
   const double r_min = r_max * 0.65 * (1 - std::pow(double(target) / m, 1.5));
   result.base_radius = r_max;
@@ -71,7 +71,7 @@ EliminationResult eliminate_samples(const std::vector<Vec3>& candidates, const s
       double scale = 0.5 * (q[i] + q[j]);
       double d = length(candidates[i] - candidates[j]) / scale;
       if (d >= 2 * r_max) return;
-      d = std::max(d, r_min);
+      d = std::max(d, 2 * r_min);  // Yuksel's weight limiting: distances below d_min = 2 r_min count as d_min
       float w = static_cast<float>(std::pow(1 - d / (2 * r_max), 8));
       neighbours[i].push_back({j, w});
       weight[i] += w;

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include <mutex>
 #include <thread>
 
 #include "pipelines/cl_scene.hpp"
@@ -21,15 +22,29 @@ constexpr double kCutoff = 3.0;     // Gaussians end at 3 sigma
 constexpr float kDepthClamp = 20;   // exp(-20) ~ 2e-9: deeper is dark either way
 constexpr int kMaxShell = kSingleGridMargin - 1;
 
-// Runs f(begin, end) over [0, n) on the hardware's threads.
+size_t thread_count(size_t n) {
+  return std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<size_t>(1, n / 64));
+}
+
+// Runs f(begin, end, thread) over [0, n) on `threads` threads; an exception in one is rethrown
+// after all have joined.
 template <class F>
-void parallel_for(size_t n, F&& f) {
-  size_t threads = std::max(1u, std::thread::hardware_concurrency());
-  threads = std::min(threads, std::max<size_t>(1, n / 64));
-  std::vector<std::thread> pool;
+void parallel_for(size_t n, F&& f, size_t threads = 0) {
+  if (threads == 0) threads = thread_count(n);
+  std::vector<std::jthread> pool;
+  std::exception_ptr error;
+  std::mutex m;
   for (size_t t = 0; t < threads; ++t)
-    pool.emplace_back([&, t] { f(n * t / threads, n * (t + 1) / threads); });
-  for (auto& th : pool) th.join();
+    pool.emplace_back([&, t] {
+      try {
+        f(n * t / threads, n * (t + 1) / threads, t);
+      } catch (...) {
+        std::lock_guard lock(m);
+        if (!error) error = std::current_exception();
+      }
+    });
+  pool.clear();  // joins
+  if (error) std::rethrow_exception(error);
 }
 
 // Voxel index range a Gaussian at p with cutoff radius R touches.
@@ -109,13 +124,17 @@ class Reader {
 
 SingleBakeParams SingleBakeParams::read(SettingsReader& r) {
   SingleBakeParams p;
-  p.directions = r.integer("directions", p.directions, 8, 4096);
-  p.samples = r.integer("samples", p.samples, 16, 2'000'000);
+  p.directions = r.integer("directions", p.directions, 8, 1024);
+  p.samples = r.integer("samples", p.samples, 16, 400'000);
   p.sh_bands = r.integer("sh_order", p.sh_bands, 2, kMaxShBands);
   p.sh_depth = r.integer("sh_depth", p.sh_depth ? 1 : 0, 0, 1) == 1;
   p.radius = r.number("radius", p.radius, 0.2, 2.0);
-  p.candidates = r.integer("candidates", p.candidates, 2, 20);
+  p.candidates = r.integer("candidates", p.candidates, 2, 10);
   p.seed = static_cast<uint32_t>(r.integer("seed", int(p.seed), 0, 1 << 30));
+  // The elimination keeps ~25 neighbours per candidate: bound the candidates' memory (~1 GB).
+  if (double(p.samples) * p.candidates > 2.5e6)
+    throw ValidationError("settings.candidates", "samples x candidates must not exceed 2500000 (got " +
+                                                     std::to_string(p.samples) + " x " + std::to_string(p.candidates) + ")");
   return p;
 }
 
@@ -257,16 +276,29 @@ std::vector<float> divergence(const VoxelGrid& g, const std::vector<float>& T) {
   return rho;
 }
 
-std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<float>& positions,
-                                 const std::vector<Vec3>& dirs) {
-  const int samples = static_cast<int>(positions.size() / 3), n = static_cast<int>(dirs.size());
-  std::vector<float> sigma_t(grid.sigma_s.size());
-  for (size_t i = 0; i < sigma_t.size(); ++i) sigma_t[i] = grid.sigma_s[i] + grid.sigma_a[i];
-  std::vector<float> flat_dirs;
-  for (const Vec3& d : dirs) flat_dirs.insert(flat_dirs.end(), {float(d.x), float(d.y), float(d.z)});
-  cl::Buffer d_sigma = upload(cl, sigma_t), d_pos = upload(cl, positions), d_dirs = upload(cl, flat_dirs);
+namespace {
+
+// The grid's extinction and the directions on the device, uploaded once for all chunks.
+struct DepthTables {
+  cl::Buffer sigma_t, dirs;
+  DepthTables(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<Vec3>& directions) {
+    std::vector<float> st(grid.sigma_s.size());
+    for (size_t i = 0; i < st.size(); ++i) st[i] = grid.sigma_s[i] + grid.sigma_a[i];
+    std::vector<float> flat;
+    for (const Vec3& d : directions) flat.insert(flat.end(), {float(d.x), float(d.y), float(d.z)});
+    sigma_t = upload(cl, st);
+    dirs = upload(cl, flat);
+  }
+};
+
+std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid, const DepthTables& tables,
+                                 const std::vector<float>& positions, int n) {
+  const int samples = static_cast<int>(positions.size() / 3);
   std::vector<float> out(size_t(samples) * n * 3);
   if (samples == 0) return out;
+  cl::Buffer d_pos = upload(cl, positions);
+  const cl::Buffer& d_sigma = tables.sigma_t;
+  const cl::Buffer& d_dirs = tables.dirs;
   cl::Buffer d_out(cl.context(), CL_MEM_WRITE_ONLY, out.size() * sizeof(float));
   cl::Kernel k(cl.program(kProgram), "sample_depths");
   cl_float3 origin{{float(grid.origin.x), float(grid.origin.y), float(grid.origin.z)}};
@@ -274,6 +306,13 @@ std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid, cons
   cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(samples), size_t(n)));
   cl.queue().enqueueReadBuffer(d_out, CL_TRUE, 0, out.size() * sizeof(float), out.data());
   return out;
+}
+
+}  // namespace
+
+std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<float>& positions,
+                                 const std::vector<Vec3>& dirs) {
+  return sample_depths(cl, grid, DepthTables(cl, grid, dirs), positions, static_cast<int>(dirs.size()));
 }
 
 double gaussian_sum(const SingleBake& b, const Vec3& p) {
@@ -413,14 +452,22 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
     bake.weight[i] = static_cast<float>(std::pow(spacing / bake.sigma[i], 3) / std::pow(2 * std::numbers::pi, 1.5));
   }
   std::vector<double> sum(voxels);
+  const size_t threads = thread_count(size_t(n));
+  std::vector<std::vector<double>> partial(threads - 1, std::vector<double>(voxels));
   auto accumulate = [&] {
-    std::fill(sum.begin(), sum.end(), 0.0);
-    for (int i = 0; i < n; ++i)
-      for_support(g, pos(i), bake.sigma[i], [&](size_t v, double e) { sum[v] += bake.weight[i] * e; });
+    // Each thread adds its samples into its own array; the arrays are summed after.
+    parallel_for(size_t(n), [&](size_t a, size_t b, size_t t) {
+      std::vector<double>& out = t == 0 ? sum : partial[t - 1];
+      std::fill(out.begin(), out.end(), 0.0);
+      for (size_t i = a; i < b; ++i)
+        for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) { out[v] += bake.weight[i] * e; });
+    }, threads);
+    for (const auto& part : partial)
+      for (size_t v = 0; v < voxels; ++v) sum[v] += part[v];
   };
   for (int pass = 0; pass < 4; ++pass) {
     accumulate();
-    parallel_for(size_t(n), [&](size_t a, size_t b) {
+    parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
       for (size_t i = a; i < b; ++i) {
         double num = 0, den = 0;
         for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
@@ -447,7 +494,7 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   // Each sample's sigma_s: the Gaussian-weighted mean of the medium (boundary voxels hold
   // sigma_s times their medium fraction, so the mean divides by the weighted occupancy).
   bake.sigma_s.assign(3 * size_t(n), 0.f);
-  parallel_for(size_t(n), [&](size_t a, size_t b) {
+  parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
     for (size_t i = a; i < b; ++i) {
       double acc[3] = {0, 0, 0}, occ = 0;
       for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
@@ -468,11 +515,12 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   bake.sh.assign(size_t(n) * 3 * nc, 0.f);
   const size_t chunk = std::clamp<size_t>((16u << 20) / (dirs.size() * 3), 1, std::max(1, n / 8));
   const double w = 4 * std::numbers::pi / double(dirs.size());
+  const DepthTables tables(cl, g, dirs);
   for (size_t first = 0; first < size_t(n); first += chunk) {
     size_t last = std::min(size_t(n), first + chunk);
     std::vector<float> part(depth_position.begin() + 3 * first, depth_position.begin() + 3 * last);
-    std::vector<float> tau = sample_depths(cl, g, part, dirs);
-    parallel_for(last - first, [&](size_t a, size_t b) {
+    std::vector<float> tau = sample_depths(cl, g, tables, part, static_cast<int>(dirs.size()));
+    parallel_for(last - first, [&](size_t a, size_t b, size_t) {
       std::vector<double> acc(3 * nc);
       for (size_t s = a; s < b; ++s) {
         std::fill(acc.begin(), acc.end(), 0.0);

@@ -40,7 +40,7 @@ struct SingleBakeParams {
   int samples = 25000;
   int sh_bands = 5;        // 2..5: 4..25 coefficients per channel ("sh_order")
   bool sh_depth = false;   // project the optical depth (true) or the transmittance (false)
-  double radius = 0.6;     // Gaussian sigma / local spacing
+  double radius = 0.5;     // Gaussian sigma / local spacing
   int candidates = 5;      // candidates per sample for the elimination
   uint32_t seed = 1;
   // Reads directions, samples, sh_order, sh_depth, radius, candidates, seed from `r`.

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <charconv>
 #include <functional>
 #include <string_view>
 
@@ -14,7 +15,7 @@ namespace scatter {
 namespace {
 
 // Bump when the bake's results change, so old cache entries are not reused.
-constexpr const char* kSingleBakeVersion = "single-2";
+constexpr const char* kSingleBakeVersion = "single-3";
 
 struct SingleSettings {
   SingleBakeParams bake;
@@ -40,8 +41,16 @@ void add_params(BakeKey& key, const SingleBakeParams& p) {
       .add("seed", p.seed);
 }
 
+// Exact text of a double (shortest round trip).
+std::string exact(double v) {
+  char buf[32];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
 // Cheap identity of what the bake depends on, to skip even the voxelization when a live session
-// renders the same asset again: mesh bytes, the density object, the medium and the resolution.
+// renders the same asset again: mesh bytes, the density object (held by Current, so its address
+// cannot be reused by another while compared), the medium and the resolution.
 std::string fingerprint(const Scene& scene, const SingleBakeParams& p) {
   std::string s;
   auto h = [&](std::string_view b) { s += std::to_string(std::hash<std::string_view>{}(b)) + "|"; };
@@ -49,9 +58,9 @@ std::string fingerprint(const Scene& scene, const SingleBakeParams& p) {
   h(bytes_of(scene.mesh.indices));
   s += std::to_string(reinterpret_cast<uintptr_t>(scene.medium.density.get())) + "|";
   for (const Vec3* v : {&scene.medium.sigma_s, &scene.medium.sigma_a})
-    for (int c = 0; c < 3; ++c) s += std::to_string((*v)[c]) + ",";
+    for (int c = 0; c < 3; ++c) s += exact((*v)[c]) + ",";
   s += std::to_string(scene.voxels) + "|" + std::to_string(p.directions) + "|" + std::to_string(p.samples) +
-       "|" + std::to_string(p.sh_bands) + "|" + std::to_string(p.sh_depth) + "|" + std::to_string(p.radius) +
+       "|" + std::to_string(p.sh_bands) + "|" + std::to_string(p.sh_depth) + "|" + exact(p.radius) +
        "|" + std::to_string(p.candidates) + "|" + std::to_string(p.seed);
   return s;
 }
@@ -140,12 +149,11 @@ BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request
       product = std::move(made);
     }
     clock.stop(r.cache_hit ? "cache" : "bake");
-    current_ = {fp, hex, std::move(product), false};
+    current_ = {fp, hex, std::move(product), scene.medium.density, false};
   } else {
     r.cache_hit = true;
     clock.stop("cache");
   }
-  if (progress) progress("done", 1);
   const SingleBake& b = *current_.bake;
   r.key = current_.key;
   r.bake_timings = b.timings;

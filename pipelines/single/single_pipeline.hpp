@@ -9,7 +9,7 @@
 //               ray between max(ball entry, first surface) and min(ball exit, second surface)
 //               (erf), added into a float target
 //
-// Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 0, radius 0.6,
+// Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 0, radius 0.5,
 // candidates 5, seed 1) and clip_back (1): clip at the second surface (0: the paper's front-only
 // clipping). The term is the single-scattered radiance; the surface, refraction and Fresnel at the
 // boundary are not included (ior is neglected, and the plan says so).
@@ -48,6 +48,7 @@ class SinglePipeline : public Pipeline {
   struct Current {
     std::string fingerprint, key;
     std::shared_ptr<const SingleBake> bake;
+    std::shared_ptr<const DensityField> density;  // keeps the fingerprinted address taken
     bool uploaded = false;
   };
   void upload();

@@ -203,8 +203,8 @@ TEST_F(SinglePipelineTest, ShadePassMatchesCpu) {
 }
 
 // The image against the reference marcher on the same voxels. This bake (20000 samples, 64
-// directions, 32^3 voxels, 64^2 pixels) measured 13.7 % relative RMSE, most of it at the rim where
-// Gaussians straddle the surface, and a mean 0.4 % low; the bounds leave a little room for other
+// directions, 32^3 voxels, 64^2 pixels) measured 13.6 % relative RMSE, most of it at the rim where
+// Gaussians straddle the surface, and a mean 0.4 % high; the bounds leave a little room for other
 // devices. Figures for larger bakes are in docs/BENCHMARKS.md.
 TEST_F(SinglePipelineTest, MatchesReferenceSingleTerm) {
   Scene s = small_sphere();
@@ -223,8 +223,8 @@ TEST_F(SinglePipelineTest, MatchesReferenceSingleTerm) {
   EXPECT_NEAR(a / e, 1.0, 0.03);
 }
 
-// Measured: 23.8 % relative RMSE and a mean 7.4 % low (edges and corners, where 25 SH coefficients
-// blur the transmittance most); with sh_depth 1 the mean was about 45 % low, which is why the
+// Measured: 22.8 % relative RMSE and a mean 5.9 % low (edges and corners, where 25 SH coefficients
+// blur the transmittance most; the first light lies in the plane of the top face); with sh_depth 1 the mean was about 45 % low, which is why the
 // transmittance is the default. A homogeneous box seen over a corner, lit from behind and the side (cube-torus without the
 // torus): flat faces, edges and corners.
 TEST_F(SinglePipelineTest, MatchesReferenceOnABox) {
