@@ -309,6 +309,9 @@ TEST(ServerBakes, JobRunsToCompletionIsIdempotentAndCancels) {
     r = request(server->port(), http::verb::post, "/api/bakes", R"({"scene_name": "sphere", "settings": {"samplez": 1}})");
     EXPECT_EQ(r.result_int(), 400);
     EXPECT_EQ(json(r)["field"], "settings.samplez");
+    r = request(server->port(), http::verb::post, "/api/bakes", R"({"scene_name": "sphere", "pipeline": "thickness"})");
+    EXPECT_EQ(r.result_int(), 400);
+    EXPECT_EQ(json(r)["error"], "pipeline: pipeline thickness needs no bake");
     server->stop();
     t.join();
   }
