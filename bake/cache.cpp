@@ -194,10 +194,10 @@ std::optional<std::shared_ptr<const std::string>> BakeCache::get(const std::stri
   }
   if (read.outcome == FileRead::kCorrupt) {
     const std::string fate = quarantine(path, writes_seen);
-    spdlog::warn("bake cache: {} is corrupt ({}); {}; treating it as a miss", path.string(),
+    spdlog::warn("event=bake_cache_corrupt file=\"{}\" problem=\"{}\" fate=\"{}\" outcome=miss", path.string(),
                  read.payload_or_problem, fate);
   } else if (read.outcome == FileRead::kUnreadable) {
-    spdlog::warn("bake cache: cannot read {} ({}); treating it as a miss", path.string(),
+    spdlog::warn("event=bake_cache_unreadable file=\"{}\" problem=\"{}\" outcome=miss", path.string(),
                  read.payload_or_problem);
   }
   std::lock_guard lock(mutex_);
@@ -260,7 +260,7 @@ void BakeCache::write_file(const std::string& key_hex, const std::string& bytes)
   if (ec) {
     std::error_code ignored;
     fs::remove(temp_path, ignored);
-    spdlog::warn("bake cache: cannot write {} ({}); the product stays in memory only",
+    spdlog::warn("event=bake_cache_write_failed file=\"{}\" problem=\"{}\" outcome=memory_only",
                  final_path.string(), ec.message());
   }
 }

@@ -8,6 +8,8 @@
 
 #include <unistd.h>
 
+#include <spdlog/spdlog.h>
+
 #include "bake/cache.hpp"
 #include "gpu/embedded_sources.hpp"
 #include "gpu/error.hpp"
@@ -117,6 +119,7 @@ HttpResponse Api::error(int status, const std::string& message, const std::strin
 HttpResponse Api::handle(const HttpRequest& request) {
   std::string route_name = "other";
   HttpResponse r;
+  auto start = std::chrono::steady_clock::now();
   try {
     r = route(request, route_name);
   } catch (const ValidationError& e) {
@@ -130,6 +133,8 @@ HttpResponse Api::handle(const HttpRequest& request) {
     r = error(500, std::string("internal error: ") + e.what());
   }
   metrics_.count_request(route_name, r.status);
+  spdlog::info("event=request method={} route={} status={} ms={:.1f}", request.method, route_name, r.status,
+               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   return r;
 }
 
@@ -433,11 +438,15 @@ HttpResponse Api::create_bake(const std::string& body) {
   nlohmann::json identity = {{"pipeline", pipeline}, {"settings", settings}, {"scene", bake_identity(scene_json)}};
   bool created = false;
   auto job = bakes_.submit(identity.dump(), pipeline, stages, [&](std::shared_ptr<BakeJob> j) {
+    spdlog::info("event=bake_queued id={} pipeline={}", j->id(), pipeline);
     queue_.submit([j, scene, pipeline, settings](RenderQueue::Context& c) {
       j->run([&](const BakeProgress& progress) {
         Pipeline& p = c.pipeline(pipeline);
         return p.bake(*scene, {p.supported_terms().front(), settings, nullptr}, progress);
       });
+      nlohmann::json s = j->status();
+      spdlog::info("event=bake_finished id={} state={} cache_hit={} seconds={}", j->id(), s["state"].get<std::string>(),
+                   s.value("cache_hit", false), s.value("seconds", 0.0));
       return 0;
     });
   }, &created);

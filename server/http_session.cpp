@@ -12,7 +12,7 @@ void fail(beast::error_code ec, const char* what) {
   if (ec == boost::asio::error::operation_aborted || ec == beast::error::timeout ||
       ec == http::error::end_of_stream || ec == boost::asio::error::connection_reset)
     return;
-  spdlog::debug("http {}: {}", what, ec.message());
+  spdlog::debug("event=http_error stage={} error=\"{}\"", what, ec.message());
 }
 
 http::response<http::string_body> to_beast(const HttpResponse& r, unsigned version, bool keep_alive) {

@@ -42,7 +42,7 @@ Server::~Server() {
 void Server::do_accept() {
   acceptor_.async_accept(boost::asio::make_strand(io_), [this](boost::system::error_code ec, tcp::socket socket) {
     if (ec) {
-      if (ec != boost::asio::error::operation_aborted) spdlog::warn("accept: {}", ec.message());
+      if (ec != boost::asio::error::operation_aborted) spdlog::warn("event=accept_error error=\"{}\"", ec.message());
       if (!acceptor_.is_open()) return;
     } else {
       std::make_shared<HttpSession>(std::move(socket), api_, workers_, options_.max_upload_mb << 20)->run();
@@ -56,7 +56,7 @@ void Server::run(bool handle_signals) {
   if (handle_signals) {
     signals = std::make_unique<boost::asio::signal_set>(io_, SIGINT, SIGTERM);
     signals->async_wait([this](boost::system::error_code, int sig) {
-      spdlog::info("signal {}: stopping", sig);
+      spdlog::info("event=signal signal={} action=stop", sig);
       stop();
     });
   }

@@ -9,6 +9,7 @@
 int main(int argc, char** argv) {
   CLI::App app{"scatter: rendering of translucent and participating media"};
   app.require_subcommand(1);
+  app.fallthrough();  // --log-level also after the verb
   std::string log_level = "warn";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
@@ -32,6 +33,8 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   spdlog::set_default_logger(spdlog::default_logger()->clone("scatterd"));
+  // One line per event: time, level, then the event's key=value fields.
+  spdlog::set_pattern("ts=%Y-%m-%dT%H:%M:%S.%e level=%l %v");
   spdlog::set_level(spdlog::level::from_str(log_level));
   try {
     for (auto* sub : app.get_subcommands())

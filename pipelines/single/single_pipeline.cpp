@@ -140,7 +140,7 @@ BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request
         product = std::make_shared<SingleBake>(SingleBake::deserialize(**bytes));
         r.cache_hit = true;
       } catch (const std::exception& e) {
-        spdlog::warn("bake {}: cached product unreadable ({}); baking again", hex.substr(0, 12), e.what());
+        spdlog::warn("event=bake_product_unreadable key={} problem=\"{}\" outcome=rebake", hex, e.what());
       }
     }
     if (!product) {
