@@ -74,7 +74,7 @@ void for_support(const VoxelGrid& g, const Vec3& p, double s, F&& f) {
 
 // ---- Serialisation: a flat little-endian record -----------------------------------------------
 
-constexpr uint32_t kMagic = 0x31425353;  // "SSB1"
+constexpr uint32_t kMagic = 0x32425353;  // "SSB2"
 
 class Writer {
  public:
@@ -152,6 +152,7 @@ std::string SingleBake::serialize() const {
   w.put<double>(coverage_mean);
   w.put<double>(coverage_spread);
   w.put_floats(position);
+  w.put_floats(depth_at);
   w.put_floats(sigma);
   w.put_floats(weight);
   w.put_floats(sigma_s);
@@ -183,6 +184,7 @@ SingleBake SingleBake::deserialize(const std::string& bytes) {
   b.coverage_spread = r.get<double>();
   const size_t n = size_t(b.count);
   b.position = r.get_floats(3 * n);
+  b.depth_at = r.get_floats(3 * n);
   b.sigma = r.get_floats(n);
   b.weight = r.get_floats(n);
   b.sigma_s = r.get_floats(3 * n);
@@ -426,7 +428,7 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   EliminationResult kept = eliminate_samples(candidates, cq, volume, p.samples);
   bake.count = p.samples;
   bake.position.reserve(3 * size_t(bake.count));
-  std::vector<float> depth_position;  // where each sample's optical depth is read
+  std::vector<float>& depth_position = bake.depth_at;
   auto voxel_centre = [&](size_t v) {
     return g.center(int(v % g.nx), int((v / g.nx) % g.ny), int(v / (size_t(g.nx) * g.ny)));
   };

@@ -51,6 +51,8 @@ struct SingleBake {
   SingleBakeParams params;
   int count = 0;
   std::vector<float> position;  // 3 per sample, scene units
+  std::vector<float> depth_at;  // 3 per sample: where its optical depth is measured (its anchor
+                                // inside the medium for shell samples, else its position)
   std::vector<float> sigma;     // Gaussian standard deviation per sample
   std::vector<float> weight;    // Gaussian amplitude per sample
   std::vector<float> sigma_s;   // 3 per sample

@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "bake/cache.hpp"
+#include "pipelines/cl_scene.hpp"
 #include "pipelines/stage_clock.hpp"
 #include "pipelines/surface/raster.hpp"
 #include "protocol/json_reader.hpp"
@@ -20,11 +21,13 @@ constexpr const char* kSingleBakeVersion = "single-3";
 struct SingleSettings {
   SingleBakeParams bake;
   bool clip_back = true;
+  bool exact_tr = false;
   static SingleSettings read(const Settings& settings) {
     SettingsReader r(settings, "single");
     SingleSettings s;
     s.bake = SingleBakeParams::read(r);
     s.clip_back = r.integer("clip_back", 1, 0, 1) == 1;
+    s.exact_tr = r.integer("exact_tr", 0, 0, 1) == 1;
     r.finish();
     return s;
   }
@@ -103,7 +106,9 @@ Plan SinglePipeline::plan(const Scene& scene, const RenderRequest& request) {
   p.stages.push_back({"depth_peel", true, s.clip_back ? "first and second surface (clip both ends)"
                                                       : "first surface (the paper's clipping)"});
   p.stages.push_back({"shade", true, std::to_string(scene.lights.size()) +
-                                         " lights evaluated once per sample, not per fragment"});
+                                         " lights evaluated once per sample, not per fragment" +
+                                         (s.exact_tr ? ": exact optical depths through the voxels (exact_tr)"
+                                                     : ": transmittance from the samples' SH")});
   p.stages.push_back({"splat", true, "one Gaussian per sample integrated along each view ray (erf)"});
   if (scene.medium.ior != 1.0)
     p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " +
@@ -123,7 +128,9 @@ BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request
   std::string fp = fingerprint(scene, s.bake);
   if (!current_.bake || current_.fingerprint != fp) {
     if (progress) progress("voxelize", 0);
-    VoxelGrid grid = voxelize(scene, {.resolution = scene.voxels, .margin = kSingleGridMargin});
+    auto grid_ptr = std::make_shared<const VoxelGrid>(
+        voxelize(scene, {.resolution = scene.voxels, .margin = kSingleGridMargin}));
+    const VoxelGrid& grid = *grid_ptr;
     clock.stop("voxelize");
     BakeKey key;
     key.add("pipeline", "single").add("version", kSingleBakeVersion);
@@ -149,7 +156,7 @@ BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request
       product = std::move(made);
     }
     clock.stop(r.cache_hit ? "cache" : "bake");
-    current_ = {fp, hex, std::move(product), scene.medium.density, false};
+    current_ = {fp, hex, std::move(product), scene.medium.density, grid_ptr, false, false};
   } else {
     r.cache_hit = true;
     clock.stop("cache");
@@ -177,8 +184,36 @@ void SinglePipeline::upload() {
   sigmas_ = storage(b.sigma);
   colors_ = gpu::GlObject::create(gpu::GlKind::Buffer);
   glNamedBufferStorage(colors_.get(), static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
-                       GL_MAP_READ_BIT);
+                       GL_MAP_READ_BIT | GL_DYNAMIC_STORAGE_BIT);
   current_.uploaded = true;
+}
+
+void SinglePipeline::shade_exact(const Scene& scene) {
+  const SingleBake& b = *current_.bake;
+  const VoxelGrid& g = *current_.grid;
+  gpu::ClContext& cl = gpu_.cl();
+  if (!current_.cl_uploaded) {
+    std::vector<float> st(g.sigma_s.size());
+    for (size_t i = 0; i < st.size(); ++i) st[i] = g.sigma_s[i] + g.sigma_a[i];
+    cl_sigma_t_ = scatter::upload(cl, st);
+    cl_at_ = scatter::upload(cl, b.depth_at);
+    cl_weight_ = scatter::upload(cl, b.weight);
+    cl_sigma_s_ = scatter::upload(cl, b.sigma_s);
+    cl_out_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
+    current_.cl_uploaded = true;
+  }
+  cl::Buffer lights = scatter::upload(cl, pack_lights(scene.lights));
+  cl::Kernel k(cl.program({"kernels/reference/common.cl", "kernels/single/shade.cl"}), "shade_exact");
+  cl_float3 origin{{float(g.origin.x), float(g.origin.y), float(g.origin.z)}};
+  const Vec3& e = scene.camera.position;
+  cl_float3 eye{{float(e.x), float(e.y), float(e.z)}};
+  gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_weight_, cl_sigma_s_, b.count,
+                lights, static_cast<int>(scene.lights.size()), float(scene.medium.g), eye, cl_out_);
+  cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
+  std::vector<float> out(size_t(b.count) * 4);
+  cl.queue().enqueueReadBuffer(cl_out_, CL_TRUE, 0, out.size() * sizeof(float), out.data());
+  gpu_.gl().make_current();
+  glNamedBufferSubData(colors_.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(float)), out.data());
 }
 
 std::vector<float> SinglePipeline::read_shaded() const {
@@ -217,6 +252,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   clock.stop("depth_peel");
 
   const GLuint shade = shade_program_.get();
+  if (s.exact_tr) shade_exact(scene);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, positions_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, weights_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, sigma_s_.get());
@@ -229,9 +265,11 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   uniform3(shade, "eye", eye);
   glProgramUniform1f(shade, glGetUniformLocation(shade, "g"), float(scene.medium.g));
   set_light_uniforms(shade, scene.lights);
-  glUseProgram(shade);
-  glDispatchCompute(static_cast<GLuint>((b.count + 63) / 64), 1, 1);
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  if (!s.exact_tr) {
+    glUseProgram(shade);
+    glDispatchCompute(static_cast<GLuint>((b.count + 63) / 64), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
   glFinish();
   clock.stop("shade");
 

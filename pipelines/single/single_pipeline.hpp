@@ -10,14 +10,17 @@
 //               (erf), added into a float target
 //
 // Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 0, radius 0.5,
-// candidates 5, seed 1) and clip_back (1): clip at the second surface (0: the paper's front-only
-// clipping). The term is the single-scattered radiance; the surface, refraction and Fresnel at the
+// candidates 5, seed 1), clip_back (1): clip at the second surface (0: the paper's front-only
+// clipping), and exact_tr (0): 1 sums each sample's optical depth to the eye and to every light
+// through the voxels each frame (kernels/single/shade.cl) instead of reading the SH, which shows
+// how much of the error is the SH's (the per-frame cost then grows with the lights). The term is the single-scattered radiance; the surface, refraction and Fresnel at the
 // boundary are not included (ior is neglected, and the plan says so).
 #pragma once
 
 #include <memory>
 #include <string>
 
+#include "gpu/cl_context.hpp"
 #include "gpu/gl_objects.hpp"
 #include "pipelines/pipeline.hpp"
 #include "pipelines/single/single_bake.hpp"
@@ -49,9 +52,13 @@ class SinglePipeline : public Pipeline {
     std::string fingerprint, key;
     std::shared_ptr<const SingleBake> bake;
     std::shared_ptr<const DensityField> density;  // keeps the fingerprinted address taken
+    std::shared_ptr<const VoxelGrid> grid;        // the medium it was baked from (exact_tr)
     bool uploaded = false;
+    bool cl_uploaded = false;
   };
   void upload();
+  // exact_tr: the per-sample factors by kernels/single/shade.cl, written into colors_.
+  void shade_exact(const Scene& scene);
 
   gpu::Gpu& gpu_;
   BakeCache* cache_;
@@ -59,6 +66,7 @@ class SinglePipeline : public Pipeline {
   Current current_;
   gpu::GlObject distance_program_, shade_program_, splat_program_, empty_vao_;
   gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_;
+  cl::Buffer cl_sigma_t_, cl_at_, cl_weight_, cl_sigma_s_, cl_out_;
 };
 
 }  // namespace scatter

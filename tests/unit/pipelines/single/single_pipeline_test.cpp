@@ -245,6 +245,37 @@ TEST_F(SinglePipelineTest, MatchesReferenceOnABox) {
   EXPECT_NEAR(a / e, 1.0, 0.1);
 }
 
+// exact_tr: the per-sample factor with optical depths summed through the voxels. On the box,
+// whose faces and edges 25 SH coefficients blur, it must be much closer to the reference (the
+// remaining error is the Gaussians'); and the two shadings of the same samples must agree on the
+// whole.
+TEST_F(SinglePipelineTest, ExactTransmittanceRemovesTheShError) {
+  Scene s = load_scene(test::source_path("scenes/cube-torus.json"));
+  s.medium.density = small_sphere().medium.density;  // constant
+  s.width = s.height = 64;
+  s.voxels = 32;
+  ReferencePipeline ref(test::shared_gpu());
+  Image expected = ref.render(s, {Terms::Single, {{"step", 0.25}}, nullptr}).image;
+  auto mask = coverage_mask(s, voxelize(s, {.resolution = s.voxels}));
+  Settings exact = kQuick;
+  exact["exact_tr"] = 1;
+  Image with_sh = pipeline().render(s, {Terms::Single, kQuick, nullptr}).image;
+  std::vector<float> sh_factors = pipeline().read_shaded();
+  Image with_exact = pipeline().render(s, {Terms::Single, exact, nullptr}).image;
+  std::vector<float> exact_factors = pipeline().read_shaded();
+  double e_sh = relative_rmse(with_sh, expected, mask), e_exact = relative_rmse(with_exact, expected, mask);
+  EXPECT_LT(e_exact, 0.6 * e_sh) << "SH " << e_sh << ", exact " << e_exact;
+  // Both shade the same samples: their factors agree on the whole (the SH differ most where the
+  // transmittance is small, so the comparison is of sums, not ratios).
+  double diff = 0, total = 0;
+  for (size_t i = 0; i < exact_factors.size(); i += 4) {
+    diff += std::abs(sh_factors[i] - exact_factors[i]);
+    total += exact_factors[i];
+  }
+  EXPECT_GT(total, 0);
+  EXPECT_LT(diff / total, 0.25);  // measured 15 %: the SH error on this box
+}
+
 // Lights add: eight copies of a light at an eighth of its intensity render the same image.
 TEST_F(SinglePipelineTest, LightsAreLinear) {
   Scene one = small_sphere();
