@@ -184,6 +184,8 @@ std::optional<std::shared_ptr<const std::string>> BakeCache::get(const std::stri
   const fs::path path = file_path(key_hex);
   FileRead read = read_bake_file(path);
   if (read.outcome == FileRead::kOk) {
+    std::error_code touch;
+    fs::last_write_time(path, fs::file_time_type::clock::now(), touch);  // recently used
     auto product = std::make_shared<const std::string>(std::move(read.payload_or_problem));
     std::lock_guard lock(mutex_);
     ++stats_.disk_hits;
@@ -231,7 +233,52 @@ void BakeCache::put(const std::string& key_hex, std::string bytes) {
     ++stats_.stores;
     remember(key_hex, product);
   }
-  if (!dir_.empty()) write_file(key_hex, *product);
+  if (!dir_.empty()) {
+    write_file(key_hex, *product);
+    if (disk_budget_ > 0) trim_disk(key_hex);
+  }
+}
+
+void BakeCache::set_disk_budget(uint64_t bytes) { disk_budget_ = bytes; }
+
+void BakeCache::trim_disk(const std::string& keep_key) {
+  struct Entry {
+    fs::file_time_type time;
+    uint64_t size;
+    fs::path path;
+  };
+  std::vector<Entry> files;
+  uint64_t total = 0;
+  const auto now = fs::file_time_type::clock::now();
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir_, ec)) {
+    std::error_code fe;
+    const std::string name = e.path().filename().string();
+    auto time = e.last_write_time(fe);
+    if (fe) continue;
+    if (name.find(".bake.tmp-") != std::string::npos) {
+      if (now - time > std::chrono::hours(1)) fs::remove(e.path(), fe);
+      continue;
+    }
+    if (e.path().extension() != ".bake" || name.substr(0, 64) == keep_key) {
+      if (e.path().extension() == ".bake") total += e.file_size(fe);
+      continue;
+    }
+    uint64_t size = e.file_size(fe);
+    if (fe) continue;
+    files.push_back({time, size, e.path()});
+    total += size;
+  }
+  std::sort(files.begin(), files.end(), [](const Entry& a, const Entry& b) { return a.time < b.time; });
+  for (const Entry& f : files) {
+    if (total <= disk_budget_) break;
+    std::error_code re;
+    if (fs::remove(f.path, re)) {
+      total -= f.size;
+      std::lock_guard lock(mutex_);
+      ++stats_.disk_evictions;
+    }
+  }
 }
 
 void BakeCache::write_file(const std::string& key_hex, const std::string& bytes) {

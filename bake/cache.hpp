@@ -2,6 +2,7 @@
 // disk. Keys are SHA-256 hex digests built with BakeKey; products are opaque bytes. Thread safe.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -44,6 +45,7 @@ class BakeKey {
 // misses counts every get() that returned nullopt, corrupt ones included.
 struct CacheStats {
   uint64_t memory_hits = 0, disk_hits = 0, misses = 0, corrupt = 0, stores = 0;
+  uint64_t disk_evictions = 0;  // files removed to keep the directory under its disk budget
 };
 
 class BakeCache {
@@ -64,6 +66,10 @@ class BakeCache {
   void put(const std::string& key_hex, std::string bytes);
 
   CacheStats stats() const;
+  // Keeps the directory's .bake files under `bytes` (0: no limit) by removing the least recently
+  // used (file modification time; a disk hit refreshes it) after each put(). The scan also removes
+  // temporary files a crashed writer left, once they are an hour old.
+  void set_disk_budget(uint64_t bytes);
   const std::filesystem::path& dir() const;
   size_t memory_bytes() const;  // payload bytes held in memory now
 
@@ -80,11 +86,13 @@ class BakeCache {
 
   void remember(const std::string& key_hex, Product product);  // caller holds mutex_
   void write_file(const std::string& key_hex, const std::string& bytes);
+  void trim_disk(const std::string& keep_key);
   // Counts a corrupt file and moves it aside; says what became of it.
   std::string quarantine(const std::filesystem::path& path, uint64_t writes_seen);
 
   const std::filesystem::path dir_;
   const size_t memory_budget_;
+  std::atomic<uint64_t> disk_budget_{0};
 
   mutable std::mutex mutex_;
   Lru lru_;

@@ -10,8 +10,13 @@
 
 namespace scatter::tools {
 
-void add_cache_dir_option(CLI::App* cmd, std::string& dir);
-// "" -> BakeCache::default_dir(); "none" -> memory only.
-std::unique_ptr<BakeCache> open_cache(const std::string& dir);
+struct CacheOptions {
+  std::string dir;       // "" -> BakeCache::default_dir(); "none" -> memory only
+  size_t max_mb = 4096;  // disk budget of the directory's bake products
+};
+
+// --cache-dir and --cache-max-mb.
+void add_cache_options(CLI::App* cmd, CacheOptions& options);
+std::unique_ptr<BakeCache> open_cache(const CacheOptions& options);
 
 }  // namespace scatter::tools

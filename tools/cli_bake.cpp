@@ -15,7 +15,7 @@ struct BakeOptions {
   std::string pipeline = "single";
   int directions = -1, samples = -1, sh_order = -1;  // -1: the pipeline's default
   std::vector<std::string> settings;
-  std::string cache_dir;
+  CacheOptions cache;
   std::string device;
   bool json = false;
 };
@@ -34,7 +34,7 @@ int run_bake(const BakeOptions& o) {
   if (o.directions != -1) request.settings["directions"] = o.directions;
   if (o.samples != -1) request.settings["samples"] = o.samples;
   if (o.sh_order != -1) request.settings["sh_order"] = o.sh_order;
-  auto cache = open_cache(o.cache_dir);
+  auto cache = open_cache(o.cache);
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
   auto pipeline = make_pipeline(o.pipeline, gpu, cache.get());
   pipeline->plan(scene, {pipeline->supported_terms().front(), request.settings, nullptr});  // validates
@@ -78,7 +78,7 @@ Handler add_bake_command(CLI::App& app) {
   cmd->add_option("--samples", o->samples, "Sample count (single: 25000)");
   cmd->add_option("--sh-order", o->sh_order, "Spherical-harmonic bands, 2-5: 4-25 coefficients (single: 5)");
   cmd->add_option("--set", o->settings, "Pipeline setting key=value (repeatable)");
-  add_cache_dir_option(cmd, o->cache_dir);
+  add_cache_options(cmd, o->cache);
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");
   cmd->add_flag("--json", o->json, "Print the key, cache hit, stage times and statistics as JSON");
   return [o] { return run_bake(*o); };

@@ -21,7 +21,7 @@ struct RenderOptions {
   double exposure = 1.0;
   std::string device;
   std::vector<std::string> settings;
-  std::string cache_dir;
+  CacheOptions cache;
   bool json = false;
 };
 
@@ -63,7 +63,7 @@ int run_render(const RenderOptions& o) {
   check_image_path(o.out);  // before the render, not after it
 
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
-  auto cache = open_cache(o.cache_dir);
+  auto cache = open_cache(o.cache);
   auto pipeline = make_pipeline(o.pipeline, gpu, cache.get());
   RenderRequest request;
   request.settings = parse_settings(o.settings);
@@ -117,7 +117,7 @@ Handler add_render_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");
   cmd->add_option("--set", o->settings, "Pipeline setting key=value (repeatable), e.g. spp=256");
-  add_cache_dir_option(cmd, o->cache_dir);
+  add_cache_options(cmd, o->cache);
   cmd->add_flag("--json", o->json, "Print the plan and per-stage milliseconds as one JSON object");
   return [o] { return run_render(*o); };
 }

@@ -18,14 +18,14 @@ namespace {
 struct ServeOptions {
   server::ServerOptions server;
   std::string scenes_dir = SCATTER_SCENES_DIR;
-  std::string cache_dir;
+  CacheOptions cache;
 };
 
 int run_serve(ServeOptions o) {
   o.server.api.scenes_dir = o.scenes_dir;
   if (!std::filesystem::is_directory(o.server.api.scenes_dir))
     throw std::runtime_error("--scenes-dir: " + o.scenes_dir + " is not a folder");
-  o.server.cache = open_cache(o.cache_dir);
+  o.server.cache = open_cache(o.cache);
   if (!o.server.cache->dir().empty()) o.server.api.assets_dir = o.server.cache->dir() / "assets";
   server::Server server(o.server);
   std::cout << "scatterd: serving on http://" << o.server.bind << ":" << server.port() << "/"
@@ -52,7 +52,7 @@ Handler add_serve_command(CLI::App& app) {
   cmd->add_option("--max-sessions", o->server.api.max_sessions, "Live WebSocket sessions at once")
       ->capture_default_str()->check(CLI::Range(1, 10000));
   cmd->add_option("--device", o->server.gpu.cl_device, "OpenCL device: P:D or part of its name");
-  add_cache_dir_option(cmd, o->cache_dir);
+  add_cache_options(cmd, o->cache);
   return [o] { return run_serve(*o); };
 }
 

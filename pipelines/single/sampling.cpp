@@ -46,7 +46,7 @@ class HashGrid {
 }  // namespace
 
 EliminationResult eliminate_samples(const std::vector<Vec3>& candidates, const std::vector<float>& q,
-                                    double volume, int target) {
+                                    double volume, int target, const std::function<void(double)>& progress) {
   const int m = static_cast<int>(candidates.size());
   if (target <= 0) throw std::invalid_argument("sample elimination: the target count must be positive");
   if (target > m)
@@ -66,6 +66,7 @@ EliminationResult eliminate_samples(const std::vector<Vec3>& candidates, const s
   std::vector<std::vector<std::pair<int, float>>> neighbours(m);
   std::vector<double> weight(m, 0.0);
   for (int i = 0; i < m; ++i) {
+    if (progress && i % 8192 == 0) progress(0.5 * i / m);
     grid.near(candidates[i], [&](int j) {
       if (j == i) return;
       double scale = 0.5 * (q[i] + q[j]);
@@ -90,6 +91,7 @@ EliminationResult eliminate_samples(const std::vector<Vec3>& candidates, const s
     if (removed[i] || w != weight[i]) continue;
     removed[i] = 1;
     --left;
+    if (progress && left % 8192 == 0) progress(0.5 + 0.5 * double(m - left) / (m - target));
     for (auto [j, wij] : neighbours[i]) {
       if (removed[j]) continue;
       weight[j] -= wij;

@@ -23,8 +23,10 @@ struct EliminationResult {
 // `q` has one relative radius per candidate (all 1 for uniform spacing); `volume` is the region's
 // volume in normalised units (sum of dV / q^3). Throws std::invalid_argument if target exceeds the
 // candidates or is not positive.
+// `progress` (optional) hears the fraction done now and then, and may throw to stop the work.
 EliminationResult eliminate_samples(const std::vector<Vec3>& candidates, const std::vector<float>& q,
-                                    double volume, int target);
+                                    double volume, int target,
+                                    const std::function<void(double)>& progress = {});
 
 // Smallest normalised distance between two kept samples: |a - b| / ((q_a + q_b) / 2).
 double min_normalized_distance(const std::vector<Vec3>& points, const std::vector<float>& q);

@@ -425,7 +425,8 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
     cvoxel[c] = v;
   }
   report("sampling", 0.2);
-  EliminationResult kept = eliminate_samples(candidates, cq, volume, p.samples);
+  EliminationResult kept =
+      eliminate_samples(candidates, cq, volume, p.samples, [&](double f) { report("sampling", 0.2 + 0.8 * f); });
   bake.count = p.samples;
   bake.position.reserve(3 * size_t(bake.count));
   std::vector<float>& depth_position = bake.depth_at;
