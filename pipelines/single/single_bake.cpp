@@ -74,7 +74,7 @@ void for_support(const VoxelGrid& g, const Vec3& p, double s, F&& f) {
 
 // ---- Serialisation: a flat little-endian record -----------------------------------------------
 
-constexpr uint32_t kMagic = 0x32425353;  // "SSB2"
+constexpr uint32_t kMagic = 0x33425353;  // "SSB3"
 
 class Writer {
  public:
@@ -130,6 +130,7 @@ SingleBakeParams SingleBakeParams::read(SettingsReader& r) {
   p.sh_depth = r.integer("sh_depth", p.sh_depth ? 1 : 0, 0, 1) == 1;
   p.radius = r.number("radius", p.radius, 0.2, 2.0);
   p.candidates = r.integer("candidates", p.candidates, 2, 10);
+  p.density_guide = r.integer("density_guide", p.density_guide ? 1 : 0, 0, 1) == 1;
   p.seed = static_cast<uint32_t>(r.integer("seed", int(p.seed), 0, 1 << 30));
   // The elimination keeps ~25 neighbours per candidate: bound the candidates' memory (~1 GB).
   if (double(p.samples) * p.candidates > 2.5e6)
@@ -147,6 +148,7 @@ std::string SingleBake::serialize() const {
   w.put<int32_t>(params.sh_depth);
   w.put<double>(params.radius);
   w.put<int32_t>(params.candidates);
+  w.put<int32_t>(params.density_guide);
   w.put<uint32_t>(params.seed);
   w.put<int32_t>(count);
   w.put<double>(coverage_mean);
@@ -176,6 +178,7 @@ SingleBake SingleBake::deserialize(const std::string& bytes) {
   b.params.sh_depth = r.get<int32_t>() != 0;
   b.params.radius = r.get<double>();
   b.params.candidates = r.get<int32_t>();
+  b.params.density_guide = r.get<int32_t>() != 0;
   b.params.seed = r.get<uint32_t>();
   b.count = r.get<int32_t>();
   if (b.count < 0 || b.params.sh_bands < 1 || b.params.sh_bands > kMaxShBands)
@@ -350,6 +353,40 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   std::vector<float> rho = divergence(g, moment);
   clock.stop("divergence");
   report("divergence", 1);
+
+  // Optionally (density_guide) also where the extinction changes inside the medium, such as
+  // between layers: rho += rho_95 * |grad sigma_t| / its 95th percentile, over voxels whose six
+  // neighbours are all medium (the surface is div T's already).
+  if (p.density_guide) {
+    std::vector<float> grad(voxels, 0.f), found;
+    auto st = [&](size_t v) {
+      return (g.sigma_s[3 * v] + g.sigma_a[3 * v] + g.sigma_s[3 * v + 1] + g.sigma_a[3 * v + 1] + g.sigma_s[3 * v + 2] +
+              g.sigma_a[3 * v + 2]) / 3.0;
+    };
+    for (int k = 1; k + 1 < g.nz; ++k)
+      for (int j = 1; j + 1 < g.ny; ++j)
+        for (int i = 1; i + 1 < g.nx; ++i) {
+          size_t v = g.index(i, j, k);
+          size_t n[6] = {g.index(i - 1, j, k), g.index(i + 1, j, k), g.index(i, j - 1, k),
+                         g.index(i, j + 1, k), g.index(i, j, k - 1), g.index(i, j, k + 1)};
+          bool interior = g.occupancy[v] >= 1;
+          for (size_t u : n) interior = interior && g.occupancy[u] >= 1;
+          if (!interior) continue;
+          double gx = st(n[1]) - st(n[0]), gy = st(n[3]) - st(n[2]), gz = st(n[5]) - st(n[4]);
+          grad[v] = static_cast<float>(std::sqrt(gx * gx + gy * gy + gz * gz) / (2 * g.voxel));
+          found.push_back(grad[v]);
+        }
+    std::vector<float> r;
+    for (size_t v = 0; v < voxels; ++v)
+      if (g.occupancy[v] > 0) r.push_back(rho[v]);
+    if (!found.empty() && !r.empty()) {
+      std::sort(found.begin(), found.end());
+      std::sort(r.begin(), r.end());
+      double g95 = found[found.size() * 19 / 20], r95 = r[r.size() * 19 / 20];
+      if (g95 > 0)
+        for (size_t v = 0; v < voxels; ++v) rho[v] += static_cast<float>(r95 * grad[v] / g95);
+    }
+  }
 
   // 3. Relative radius q in [0.5, 2] from rho (high rho: dense, small radius).
   std::vector<float> medium_rho;

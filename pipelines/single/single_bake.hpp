@@ -8,7 +8,8 @@
 //   divergence rho(x) = |div T(x)| by central differences
 //   sampling   weighted Poisson-disk sampling by sample elimination, exactly `samples` points; the
 //              local radius maps rho linearly onto [r/2, 2r] (the paper's rule; robust range:
-//              5th-95th percentile of rho), a constant rho giving uniform spacing. Samples fill
+//              5th-95th percentile of rho), a constant rho giving uniform spacing; with
+//              density_guide, rho also grows with |grad sigma_t| inside the medium. Samples fill
 //              the medium and a thin shell outside it, so that the Gaussians sum to one right up
 //              to the surface (the render clips at the mesh)
 //   gaussians  standard deviation `radius` x the local spacing, cut off at 3 sigma; weights
@@ -42,6 +43,7 @@ struct SingleBakeParams {
   bool sh_depth = false;   // project the optical depth (true) or the transmittance (false)
   double radius = 0.5;     // Gaussian sigma / local spacing
   int candidates = 5;      // candidates per sample for the elimination
+  bool density_guide = false;  // sample density also follows |grad sigma_t| inside the medium
   uint32_t seed = 1;
   // Reads directions, samples, sh_order, sh_depth, radius, candidates, seed from `r`.
   static SingleBakeParams read(SettingsReader& r);
