@@ -30,6 +30,37 @@ Scene small_sphere(int size = 64, int voxels = 32) {
 
 const Settings kQuick = {{"samples", 20000}, {"directions", 64}};
 
+// A homogeneous box seen over a corner, lit from behind and the side (cube-torus without the
+// torus): flat faces, edges and corners.
+Scene small_box() {
+  Scene s = load_scene(test::source_path("scenes/cube-torus.json"));
+  s.medium.density = small_sphere().medium.density;  // constant
+  s.width = s.height = 64;
+  s.voxels = 32;
+  return s;
+}
+
+// The reference marcher's single term for `s`, and the pixels its medium covers.
+struct Expected {
+  Image image;
+  std::vector<uint8_t> mask;
+};
+Expected reference_single(const Scene& s) {
+  ReferencePipeline ref(test::shared_gpu());
+  return {ref.render(s, {Terms::Single, {{"step", 0.25}}, nullptr}).image,
+          coverage_mask(s, voxelize(s, {.resolution = s.voxels}))};
+}
+
+// Sum of a's pixels over sum of b's.
+double mean_ratio(const Image& a, const Image& b) {
+  double x = 0, y = 0;
+  for (size_t i = 0; i < a.rgb.size(); ++i) {
+    x += a.rgb[i];
+    y += b.rgb[i];
+  }
+  return x / y;
+}
+
 // Distance from p along unit d to the exit of the box [-h, h]^3 (p inside).
 double box_exit(const Vec3& p, const Vec3& d, double h) {
   double t = 1e300;
@@ -209,40 +240,21 @@ TEST_F(SinglePipelineTest, ShadePassMatchesCpu) {
 TEST_F(SinglePipelineTest, MatchesReferenceSingleTerm) {
   Scene s = small_sphere();
   Image single = pipeline().render(s, {Terms::Single, kQuick, nullptr}).image;
-  ReferencePipeline ref(test::shared_gpu());
-  Image expected = ref.render(s, {Terms::Single, {{"step", 0.25}}, nullptr}).image;
-  auto mask = coverage_mask(s, voxelize(s, {.resolution = s.voxels}));
-  double err = relative_rmse(single, expected, mask);
-  EXPECT_LT(err, 0.16);
+  Expected expected = reference_single(s);
+  EXPECT_LT(relative_rmse(single, expected.image, expected.mask), 0.16);
   // The mean over the object, which the normalised Gaussians should get right more closely.
-  double a = 0, e = 0;
-  for (size_t i = 0; i < single.rgb.size(); ++i) {
-    a += single.rgb[i];
-    e += expected.rgb[i];
-  }
-  EXPECT_NEAR(a / e, 1.0, 0.03);
+  EXPECT_NEAR(mean_ratio(single, expected.image), 1.0, 0.03);
 }
 
 // Measured: 22.8 % relative RMSE and a mean 5.9 % low (edges and corners, where 25 SH coefficients
-// blur the transmittance most; the first light lies in the plane of the top face); with sh_depth 1 the mean was about 45 % low, which is why the
-// transmittance is the default. A homogeneous box seen over a corner, lit from behind and the side (cube-torus without the
-// torus): flat faces, edges and corners.
+// blur the transmittance most; the first light lies in the plane of the top face); with sh_depth 1
+// the mean was about 45 % low, which is why the transmittance is the default.
 TEST_F(SinglePipelineTest, MatchesReferenceOnABox) {
-  Scene s = load_scene(test::source_path("scenes/cube-torus.json"));
-  s.medium.density = small_sphere().medium.density;  // constant
-  s.width = s.height = 64;
-  s.voxels = 32;
+  Scene s = small_box();
   Image single = pipeline().render(s, {Terms::Single, kQuick, nullptr}).image;
-  ReferencePipeline ref(test::shared_gpu());
-  Image expected = ref.render(s, {Terms::Single, {{"step", 0.25}}, nullptr}).image;
-  auto mask = coverage_mask(s, voxelize(s, {.resolution = s.voxels}));
-  EXPECT_LT(relative_rmse(single, expected, mask), 0.27);
-  double a = 0, e = 0;
-  for (size_t i = 0; i < single.rgb.size(); ++i) {
-    a += single.rgb[i];
-    e += expected.rgb[i];
-  }
-  EXPECT_NEAR(a / e, 1.0, 0.1);
+  Expected expected = reference_single(s);
+  EXPECT_LT(relative_rmse(single, expected.image, expected.mask), 0.27);
+  EXPECT_NEAR(mean_ratio(single, expected.image), 1.0, 0.1);
 }
 
 // exact_tr: the per-sample factor with optical depths summed through the voxels. On the box,
@@ -250,20 +262,16 @@ TEST_F(SinglePipelineTest, MatchesReferenceOnABox) {
 // remaining error is the Gaussians'); and the two shadings of the same samples must agree on the
 // whole.
 TEST_F(SinglePipelineTest, ExactTransmittanceRemovesTheShError) {
-  Scene s = load_scene(test::source_path("scenes/cube-torus.json"));
-  s.medium.density = small_sphere().medium.density;  // constant
-  s.width = s.height = 64;
-  s.voxels = 32;
-  ReferencePipeline ref(test::shared_gpu());
-  Image expected = ref.render(s, {Terms::Single, {{"step", 0.25}}, nullptr}).image;
-  auto mask = coverage_mask(s, voxelize(s, {.resolution = s.voxels}));
+  Scene s = small_box();
+  Expected expected = reference_single(s);
   Settings exact = kQuick;
   exact["exact_tr"] = 1;
   Image with_sh = pipeline().render(s, {Terms::Single, kQuick, nullptr}).image;
   std::vector<float> sh_factors = pipeline().read_shaded();
   Image with_exact = pipeline().render(s, {Terms::Single, exact, nullptr}).image;
   std::vector<float> exact_factors = pipeline().read_shaded();
-  double e_sh = relative_rmse(with_sh, expected, mask), e_exact = relative_rmse(with_exact, expected, mask);
+  double e_sh = relative_rmse(with_sh, expected.image, expected.mask);
+  double e_exact = relative_rmse(with_exact, expected.image, expected.mask);
   EXPECT_LT(e_exact, 0.6 * e_sh) << "SH " << e_sh << ", exact " << e_exact;
   // Both shade the same samples: their factors agree on the whole (the SH differ most where the
   // transmittance is small, so the comparison is of sums, not ratios).
