@@ -4,6 +4,7 @@
 
 #include <charconv>
 #include <functional>
+#include <map>
 #include <string_view>
 
 #include "bake/cache.hpp"
@@ -202,13 +203,39 @@ void SinglePipeline::shade_exact(const Scene& scene) {
     cl_out_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     current_.cl_uploaded = true;
   }
+  const std::vector<std::string> program = {"kernels/reference/common.cl", "kernels/single/shade.cl"};
   cl::Buffer lights = scatter::upload(cl, pack_lights(scene.lights));
-  cl::Kernel k(cl.program({"kernels/reference/common.cl", "kernels/single/shade.cl"}), "shade_exact");
   cl_float3 origin{{float(g.origin.x), float(g.origin.y), float(g.origin.z)}};
+  const size_t block = size_t(std::max(b.count, 1)) * 3 * sizeof(float);
+  // Transmittance to each light, kept while the light stays where it is (its position, or its
+  // direction for a directional light, is the key).
+  std::map<std::string, cl::Buffer> still_used;
+  cl::Buffer all(cl.context(), CL_MEM_READ_WRITE, block * std::max<size_t>(scene.lights.size(), 1));
+  cl::Kernel per_light(cl.program(program), "light_transmittance");
+  for (size_t l = 0; l < scene.lights.size(); ++l) {
+    const Light& light = scene.lights[l];
+    const Vec3& where = light.type == Light::Type::Directional ? light.direction : light.position;
+    std::string key = std::to_string(int(light.type)) + ":" + exact(where.x) + "," + exact(where.y) + "," + exact(where.z);
+    auto found = current_.light_tr.find(key);
+    cl::Buffer tr;
+    if (found != current_.light_tr.end()) {
+      tr = found->second;
+    } else {
+      tr = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block);
+      gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, b.count, lights,
+                    static_cast<int>(l), tr);
+      cl.queue().enqueueNDRangeKernel(per_light, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
+      ++current_.light_passes;
+    }
+    cl.queue().enqueueCopyBuffer(tr, all, 0, l * block, block);
+    still_used[key] = tr;
+  }
+  current_.light_tr = std::move(still_used);
+  cl::Kernel k(cl.program(program), "shade_exact");
   const Vec3& e = scene.camera.position;
   cl_float3 eye{{float(e.x), float(e.y), float(e.z)}};
   gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_weight_, cl_sigma_s_, b.count,
-                lights, static_cast<int>(scene.lights.size()), float(scene.medium.g), eye, cl_out_);
+                lights, static_cast<int>(scene.lights.size()), all, float(scene.medium.g), eye, cl_out_);
   cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
   std::vector<float> out(size_t(b.count) * 4);
   cl.queue().enqueueReadBuffer(cl_out_, CL_TRUE, 0, out.size() * sizeof(float), out.data());

@@ -11,12 +11,13 @@
 //
 // Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 0, radius 0.5,
 // candidates 5, density_guide 0, seed 1), clip_back (1): clip at the second surface (0: the paper's front-only
-// clipping), and exact_tr (0): 1 sums each sample's optical depth to the eye and to every light
-// through the voxels each frame (kernels/single/shade.cl) instead of reading the SH, which shows
-// how much of the error is the SH's (the per-frame cost then grows with the lights). The term is the single-scattered radiance; the surface, refraction and Fresnel at the
+// clipping), and exact_tr (0): 1 sums each sample's optical depth to the eye (every frame) and to
+// every light (when the light appears or moves) through the voxels (kernels/single/shade.cl)
+// instead of reading the SH, which shows how much of the error is the SH's. The term is the single-scattered radiance; the surface, refraction and Fresnel at the
 // boundary are not included (ior is neglected, and the plan says so).
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 
@@ -46,6 +47,8 @@ class SinglePipeline : public Pipeline {
   const SingleBake* current() const { return current_.bake.get(); }
   // Per-sample colours of the last frame's shade pass (4 floats per sample), for tests.
   std::vector<float> read_shaded() const;
+  // exact_tr: how many per-light transmittance passes ran for the current bake (tests).
+  int light_passes() const { return current_.light_passes; }
 
  private:
   struct Current {
@@ -55,6 +58,8 @@ class SinglePipeline : public Pipeline {
     std::shared_ptr<const VoxelGrid> grid;        // the medium it was baked from (exact_tr)
     bool uploaded = false;
     bool cl_uploaded = false;
+    std::map<std::string, cl::Buffer> light_tr;  // exact_tr: transmittance to each light, by its place
+    int light_passes = 0;                         // light_tr computations so far (tests)
   };
   void upload();
   // exact_tr: the per-sample factors by kernels/single/shade.cl, written into colors_.

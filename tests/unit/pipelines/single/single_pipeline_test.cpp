@@ -284,6 +284,28 @@ TEST_F(SinglePipelineTest, ExactTransmittanceRemovesTheShError) {
   EXPECT_LT(diff / total, 0.25);  // measured 15 %: the SH error on this box
 }
 
+// exact_tr keeps each light's transmittance while the light stays put: a camera move recomputes
+// none, moving one light of two recomputes that one, and the image matches a fresh pipeline's.
+TEST_F(SinglePipelineTest, ExactTransmittanceIsRecomputedOnlyForLightsThatMoved) {
+  Scene s = small_sphere();
+  s.lights.push_back({Light::Type::Directional, {}, normalize(Vec3{0, -1, -1}), {1, 0.5, 0.5}, 2});
+  Settings exact = kQuick;
+  exact["exact_tr"] = 1;
+  SinglePipeline p(test::shared_gpu(), nullptr);
+  p.render(s, {Terms::Single, exact, nullptr});
+  EXPECT_EQ(p.light_passes(), 2);
+  s.camera.position = {1, 0.5, 4};
+  p.render(s, {Terms::Single, exact, nullptr});
+  EXPECT_EQ(p.light_passes(), 2);
+  s.lights[0].position = {-3, 3, 3};
+  Image moved = p.render(s, {Terms::Single, exact, nullptr}).image;
+  EXPECT_EQ(p.light_passes(), 3);
+  SinglePipeline fresh(test::shared_gpu(), nullptr);
+  Image expected = fresh.render(s, {Terms::Single, exact, nullptr}).image;
+  ASSERT_EQ(moved.rgb.size(), expected.rgb.size());
+  for (size_t i = 0; i < moved.rgb.size(); ++i) ASSERT_NEAR(moved.rgb[i], expected.rgb[i], 1e-6 + 1e-5 * expected.rgb[i]);
+}
+
 // Lights add: eight copies of a light at an eighth of its intensity render the same image.
 TEST_F(SinglePipelineTest, LightsAreLinear) {
   Scene one = small_sphere();
