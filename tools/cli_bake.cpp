@@ -76,7 +76,7 @@ Handler add_bake_command(CLI::App& app) {
   cmd->add_option("--pipeline", o->pipeline, "Pipeline name")->capture_default_str();
   cmd->add_option("--directions", o->directions, "Directions of the optical depth (single: 128)");
   cmd->add_option("--samples", o->samples, "Sample count (single: 25000)");
-  cmd->add_option("--sh-order", o->sh_order, "Spherical-harmonic bands, 2-5: 4-25 coefficients (single: 5)");
+  cmd->add_option("--sh-order", o->sh_order, "Spherical-harmonic bands, 2-8: 4-64 coefficients (single: 5; the paper uses up to 5)");
   cmd->add_option("--set", o->settings, "Pipeline setting key=value (repeatable)");
   add_cache_options(cmd, o->cache);
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");

@@ -7,40 +7,46 @@
 namespace scatter {
 
 void sh_basis(const Vec3& d, int bands, float* out) {
-  if (bands < 1 || bands > kMaxShBands) throw std::invalid_argument("sh_basis: bands must be in [1, 5]");
+  if (bands < 1 || bands > kMaxShBands) throw std::invalid_argument("sh_basis: bands must be in [1, 8]");
+  // Real SH without the Condon-Shortley phase: Y_l^0 = K P_l(z); for m > 0 sqrt(2) K P~_l^m(z) Re((x+iy)^m),
+  // for m < 0 the same with Im; P~_l^m = P_l^m / sin^m(theta), a polynomial in z by the usual
+  // recurrences; index l^2 + l + m. Equal to the textbook constants (0.2821, 0.4886 y, ...).
   const double x = d.x, y = d.y, z = d.z;
-  const double x2 = x * x, y2 = y * y, z2 = z * z;
-  double v[25];
-  v[0] = 0.282094791773878;
-  v[1] = 0.488602511902920 * y;
-  v[2] = 0.488602511902920 * z;
-  v[3] = 0.488602511902920 * x;
-  v[4] = 1.092548430592079 * x * y;
-  v[5] = 1.092548430592079 * y * z;
-  v[6] = 0.315391565252520 * (3 * z2 - 1);
-  v[7] = 1.092548430592079 * x * z;
-  v[8] = 0.546274215296040 * (x2 - y2);
-  v[9] = 0.590043589926644 * y * (3 * x2 - y2);
-  v[10] = 2.890611442640554 * x * y * z;
-  v[11] = 0.457045799464466 * y * (5 * z2 - 1);
-  v[12] = 0.373176332590115 * z * (5 * z2 - 3);
-  v[13] = 0.457045799464466 * x * (5 * z2 - 1);
-  v[14] = 1.445305721320277 * z * (x2 - y2);
-  v[15] = 0.590043589926644 * x * (x2 - 3 * y2);
-  v[16] = 2.503342941796705 * x * y * (x2 - y2);
-  v[17] = 1.770130769779931 * y * z * (3 * x2 - y2);
-  v[18] = 0.946174695757560 * x * y * (7 * z2 - 1);
-  v[19] = 0.669046543557289 * y * z * (7 * z2 - 3);
-  v[20] = 0.105785546915204 * (35 * z2 * z2 - 30 * z2 + 3);
-  v[21] = 0.669046543557289 * x * z * (7 * z2 - 3);
-  v[22] = 0.473087347878780 * (x2 - y2) * (7 * z2 - 1);
-  v[23] = 1.770130769779931 * x * z * (x2 - 3 * y2);
-  v[24] = 0.625835735449176 * (x2 * (x2 - 3 * y2) - y2 * (3 * x2 - y2));
-  for (int i = 0; i < bands * bands; ++i) out[i] = static_cast<float>(v[i]);
+  double c[kMaxShBands], sn[kMaxShBands];  // Re and Im of (x + iy)^m
+  c[0] = 1;
+  sn[0] = 0;
+  for (int m = 1; m < bands; ++m) {
+    c[m] = c[m - 1] * x - sn[m - 1] * y;
+    sn[m] = c[m - 1] * y + sn[m - 1] * x;
+  }
+  double pmm = 1;  // P~_m^m = (2m - 1)!!
+  for (int m = 0; m < bands; ++m) {
+    if (m > 0) pmm *= 2 * m - 1;
+    double p_prev = 0, p = pmm;  // P~_{l-1}^m, P~_l^m at l = m
+    for (int l = m; l < bands; ++l) {
+      if (l == m + 1) {
+        p_prev = p;
+        p = z * (2 * m + 1) * pmm;
+      } else if (l > m + 1) {
+        double next = ((2 * l - 1) * z * p - (l + m - 1) * p_prev) / (l - m);
+        p_prev = p;
+        p = next;
+      }
+      double ratio = 1;  // (l - m)! / (l + m)!
+      for (int k = l - m + 1; k <= l + m; ++k) ratio /= k;
+      const double k_lm = std::sqrt((2 * l + 1) / (4 * std::numbers::pi) * ratio);
+      if (m == 0) {
+        out[l * l + l] = static_cast<float>(k_lm * p);
+      } else {
+        out[l * l + l + m] = static_cast<float>(std::sqrt(2.0) * k_lm * p * c[m]);
+        out[l * l + l - m] = static_cast<float>(std::sqrt(2.0) * k_lm * p * sn[m]);
+      }
+    }
+  }
 }
 
 float sh_eval(const float* c, const Vec3& d, int bands) {
-  float y[25];
+  float y[kMaxShBands * kMaxShBands];
   sh_basis(d, bands, y);
   double s = 0;
   for (int i = 0; i < bands * bands; ++i) s += double(c[i]) * y[i];
@@ -64,7 +70,7 @@ std::vector<float> sh_project(const std::vector<Vec3>& dirs, const std::vector<f
   if (f.size() != dirs.size()) throw std::invalid_argument("sh_project: one value per direction");
   const int n = sh_count(bands);
   std::vector<double> acc(n, 0.0);
-  float y[25];
+  float y[kMaxShBands * kMaxShBands];
   for (size_t k = 0; k < dirs.size(); ++k) {
     sh_basis(dirs[k], bands, y);
     for (int i = 0; i < n; ++i) acc[i] += double(f[k]) * y[i];

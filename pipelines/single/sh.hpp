@@ -1,5 +1,5 @@
-// Real spherical harmonics up to band 4 (25 functions), orthonormal on the unit sphere, in the
-// order l = 0..4, m = -l..l. shaders/single/shade.comp evaluates the same basis; keep them equal.
+// Real spherical harmonics up to band 7 (64 functions), orthonormal on the unit sphere, in the
+// order l = 0..7, m = -l..l. shaders/single/shade.comp evaluates the same basis; keep them equal.
 #pragma once
 
 #include <array>
@@ -9,7 +9,7 @@
 
 namespace scatter {
 
-constexpr int kMaxShBands = 5;  // bands l = 0..4: 25 coefficients
+constexpr int kMaxShBands = 8;  // bands l = 0..7: 64 coefficients (the paper: up to 25)
 constexpr int sh_count(int bands) { return bands * bands; }
 
 // Y_i(d) for i < bands^2, d a unit vector.

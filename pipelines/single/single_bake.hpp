@@ -39,7 +39,7 @@ constexpr int kSingleGridMargin = 4;
 struct SingleBakeParams {
   int directions = 128;
   int samples = 25000;
-  int sh_bands = 5;        // 2..5: 4..25 coefficients per channel ("sh_order")
+  int sh_bands = 5;        // 2..8: 4..64 coefficients per channel ("sh_order"; the paper: up to 5)
   bool sh_depth = false;   // project the optical depth (true) or the transmittance (false)
   double radius = 0.5;     // Gaussian sigma / local spacing
   int candidates = 5;      // candidates per sample for the elimination

@@ -29,38 +29,48 @@ uniform vec3 light_direction[MAX_LIGHTS];
 uniform vec3 light_power[MAX_LIGHTS];
 uniform vec2 light_cone[MAX_LIGHTS];  // cos(outer), cos(inner)
 
-void basis(vec3 d, out float y[25]) {
-  float x = d.x, yy = d.y, z = d.z;
-  float x2 = x * x, y2 = yy * yy, z2 = z * z;
-  y[0] = 0.282094791773878;
-  y[1] = 0.488602511902920 * yy;
-  y[2] = 0.488602511902920 * z;
-  y[3] = 0.488602511902920 * x;
-  y[4] = 1.092548430592079 * x * yy;
-  y[5] = 1.092548430592079 * yy * z;
-  y[6] = 0.315391565252520 * (3.0 * z2 - 1.0);
-  y[7] = 1.092548430592079 * x * z;
-  y[8] = 0.546274215296040 * (x2 - y2);
-  y[9] = 0.590043589926644 * yy * (3.0 * x2 - y2);
-  y[10] = 2.890611442640554 * x * yy * z;
-  y[11] = 0.457045799464466 * yy * (5.0 * z2 - 1.0);
-  y[12] = 0.373176332590115 * z * (5.0 * z2 - 3.0);
-  y[13] = 0.457045799464466 * x * (5.0 * z2 - 1.0);
-  y[14] = 1.445305721320277 * z * (x2 - y2);
-  y[15] = 0.590043589926644 * x * (x2 - 3.0 * y2);
-  y[16] = 2.503342941796705 * x * yy * (x2 - y2);
-  y[17] = 1.770130769779931 * yy * z * (3.0 * x2 - y2);
-  y[18] = 0.946174695757560 * x * yy * (7.0 * z2 - 1.0);
-  y[19] = 0.669046543557289 * yy * z * (7.0 * z2 - 3.0);
-  y[20] = 0.105785546915204 * (35.0 * z2 * z2 - 30.0 * z2 + 3.0);
-  y[21] = 0.669046543557289 * x * z * (7.0 * z2 - 3.0);
-  y[22] = 0.473087347878780 * (x2 - y2) * (7.0 * z2 - 1.0);
-  y[23] = 1.770130769779931 * x * z * (x2 - 3.0 * y2);
-  y[24] = 0.625835735449176 * (x2 * (x2 - 3.0 * y2) - y2 * (3.0 * x2 - y2));
+const int MAX_BANDS = 8;
+const int MAX_COEFFS = MAX_BANDS * MAX_BANDS;
+
+// Real SH without the Condon-Shortley phase, index l^2 + l + m, by the recurrences of
+// pipelines/single/sh.cpp (keep them equal): Y_l^0 = K P_l(z), Y_l^{+-m} = sqrt(2) K P~_l^m(z)
+// Re / Im((x + iy)^m), with P~_l^m = P_l^m / sin^m(theta).
+void basis(vec3 d, out float y[MAX_COEFFS]) {
+  float c[MAX_BANDS], sn[MAX_BANDS];
+  c[0] = 1.0;
+  sn[0] = 0.0;
+  for (int m = 1; m < bands; ++m) {
+    c[m] = c[m - 1] * d.x - sn[m - 1] * d.y;
+    sn[m] = c[m - 1] * d.y + sn[m - 1] * d.x;
+  }
+  float pmm = 1.0;
+  for (int m = 0; m < bands; ++m) {
+    if (m > 0) pmm *= float(2 * m - 1);
+    float p_prev = 0.0, p = pmm;
+    for (int l = m; l < bands; ++l) {
+      if (l == m + 1) {
+        p_prev = p;
+        p = d.z * float(2 * m + 1) * pmm;
+      } else if (l > m + 1) {
+        float next = (float(2 * l - 1) * d.z * p - float(l + m - 1) * p_prev) / float(l - m);
+        p_prev = p;
+        p = next;
+      }
+      float ratio = 1.0;
+      for (int k = l - m + 1; k <= l + m; ++k) ratio /= float(k);
+      float k_lm = sqrt(float(2 * l + 1) / (4.0 * PI) * ratio);
+      if (m == 0) {
+        y[l * l + l] = k_lm * p;
+      } else {
+        y[l * l + l + m] = 1.41421356 * k_lm * p * c[m];
+        y[l * l + l - m] = 1.41421356 * k_lm * p * sn[m];
+      }
+    }
+  }
 }
 
 // Transmittance per channel of sample i towards the direction whose basis values are y.
-vec3 transmittance(uint i, float y[25]) {
+vec3 transmittance(uint i, float y[MAX_COEFFS]) {
   int n = bands * bands;
   vec3 s = vec3(0.0);
   for (int c = 0; c < 3; ++c) {
@@ -89,7 +99,7 @@ void main() {
   if (i >= uint(count)) return;
   vec3 b = vec3(position[3u * i], position[3u * i + 1u], position[3u * i + 2u]);
   vec3 to_eye = normalize(eye - b);
-  float y[25];
+  float y[MAX_COEFFS];
   basis(to_eye, y);
   vec3 view_tr = transmittance(i, y);
   vec3 in_scatter = vec3(0.0);

@@ -13,17 +13,35 @@ namespace scatter {
 namespace {
 
 TEST(SphericalHarmonics, BasisIsOrthonormal) {
-  const int n = 20000;
+  const int n = 40000, c = sh_count(kMaxShBands);
   auto dirs = sphere_directions(n);
-  std::vector<double> gram(25 * 25, 0.0);
-  float y[25];
+  std::vector<double> gram(size_t(c) * c, 0.0);
+  std::vector<float> y(static_cast<size_t>(c));
   for (const Vec3& d : dirs) {
-    sh_basis(d, 5, y);
-    for (int i = 0; i < 25; ++i)
-      for (int j = 0; j < 25; ++j) gram[i * 25 + j] += double(y[i]) * y[j] * 4 * std::numbers::pi / n;
+    sh_basis(d, kMaxShBands, y.data());
+    for (int i = 0; i < c; ++i)
+      for (int j = 0; j < c; ++j) gram[size_t(i) * c + j] += double(y[i]) * y[j] * 4 * std::numbers::pi / n;
   }
-  for (int i = 0; i < 25; ++i)
-    for (int j = 0; j < 25; ++j) EXPECT_NEAR(gram[i * 25 + j], i == j ? 1.0 : 0.0, 2e-3) << i << "," << j;
+  for (int i = 0; i < c; ++i)
+    for (int j = 0; j < c; ++j) EXPECT_NEAR(gram[size_t(i) * c + j], i == j ? 1.0 : 0.0, 2e-3) << i << "," << j;
+}
+
+// The textbook real SH (no Condon-Shortley phase) for a few functions of each band up to 4.
+TEST(SphericalHarmonics, MatchesKnownFunctions) {
+  Vec3 d = normalize(Vec3{0.3, -0.5, 0.8});
+  const double x = d.x, y = d.y, z = d.z;
+  float v[25];
+  sh_basis(d, 5, v);
+  EXPECT_NEAR(v[0], 0.282094791773878, 1e-6);
+  EXPECT_NEAR(v[1], 0.488602511902920 * y, 1e-6);
+  EXPECT_NEAR(v[3], 0.488602511902920 * x, 1e-6);
+  EXPECT_NEAR(v[4], 1.092548430592079 * x * y, 1e-6);
+  EXPECT_NEAR(v[6], 0.315391565252520 * (3 * z * z - 1), 1e-6);
+  EXPECT_NEAR(v[10], 2.890611442640554 * x * y * z, 1e-6);
+  EXPECT_NEAR(v[12], 0.373176332590115 * z * (5 * z * z - 3), 1e-6);
+  EXPECT_NEAR(v[20], 0.105785546915204 * (35 * z * z * z * z - 30 * z * z + 3), 1e-6);
+  EXPECT_NEAR(v[24], 0.625835735449176 * (x * x * (x * x - 3 * y * y) - y * y * (3 * x * x - y * y)), 1e-6);
+  EXPECT_THROW(sh_basis(d, kMaxShBands + 1, v), std::invalid_argument);
 }
 
 TEST(SphericalHarmonics, FibonacciDirectionsAreUnitAndBalanced) {

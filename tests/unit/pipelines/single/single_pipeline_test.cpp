@@ -329,7 +329,7 @@ TEST_F(SinglePipelineTest, PlanNamesTheBakeAndItsReuse) {
   EXPECT_FALSE(p.stages[1].run);
   EXPECT_NE(p.stages[1].reason.find("reusing"), std::string::npos);
   EXPECT_THROW(pipeline().plan(s, {Terms::Single, {{"samples", 3}}, nullptr}), ValidationError);
-  EXPECT_THROW(pipeline().plan(s, {Terms::Single, {{"sh_order", 6}}, nullptr}), ValidationError);
+  EXPECT_THROW(pipeline().plan(s, {Terms::Single, {{"sh_order", 9}}, nullptr}), ValidationError);
   EXPECT_THROW(pipeline().plan(s, {Terms::All, {}, nullptr}), ValidationError);
 }
 
