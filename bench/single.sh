@@ -5,9 +5,10 @@
 #    holding the others at 25k samples, 128 directions, 5 bands;
 #  - the SH of optical depth (exponentiated when rendering) against the paper's SH of transmittance,
 #    and clipping at the second surface against the paper's front-only clipping;
+#  - exact transmittance (exact_tr), SH up to 8 bands, the density guide;
 #  - bake time per stage at 64^3 and 128^3 voxels (128 directions, 25k samples);
 #  - frame time at 512 x 512 with 1 and 8 lights, and the reference marcher's at the same size.
-# Bakes go to a memory-only cache so every bake is timed. Takes about half an hour on 2 cores.
+# Bakes go to a memory-only cache so every bake is timed. Takes about 45 minutes on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=bench/out
@@ -24,6 +25,11 @@ for scene in sphere cube-torus layers bunny; do
     --csv "$out/single-$scene-sh.csv"
   $S bench "${common[@]}" "${base[@]}" --sweep sh_depth=0,1 --csv "$out/single-$scene-shdepth.csv"
   $S bench "${common[@]}" "${base[@]}" --sweep clip_back=0,1 --csv "$out/single-$scene-clip.csv"
+  # Beyond the paper: exact transmittance instead of the SH, SH beyond 5 bands, density guide.
+  $S bench "${common[@]}" "${base[@]}" --sweep exact_tr=0,1 --csv "$out/single-$scene-exact.csv"
+  $S bench "${common[@]}" --set samples=25000 --set directions=128 --sweep sh_order=5,6,8 \
+    --csv "$out/single-$scene-sh-high.csv"
+  $S bench "${common[@]}" "${base[@]}" --sweep density_guide=0,1 --csv "$out/single-$scene-guide.csv"
 done
 bench/plot "$out/single-samples.png" "$out"/single-*-samples.csv
 
