@@ -1,0 +1,95 @@
+// POST/GET /api/bakes and GET/DELETE /api/bakes/{id}: bake jobs validated here, run on the
+// render thread, followed through bake/jobs.
+#include <spdlog/spdlog.h>
+
+#include <fstream>
+
+#include "protocol/json_reader.hpp"
+#include "server/api.hpp"
+#include "server/api_util.hpp"
+
+namespace scatter::server {
+
+// What a bake depends on in a scene: the solid, the medium and the grid resolution (not the camera,
+// lights or image size), as canonical JSON.
+namespace {
+
+nlohmann::json bake_identity(const nlohmann::json& scene) {
+  nlohmann::json id = nlohmann::json::object();
+  for (const char* k : {"mesh", "medium", "voxels"})
+    if (scene.is_object() && scene.contains(k)) id[k] = scene[k];
+  return id;
+}
+
+}  // namespace
+
+HttpResponse Api::create_bake(const std::string& body) {
+  nlohmann::json request = nlohmann::json::parse(body, nullptr, false);
+  if (request.is_discarded()) throw ValidationError("body", "is not valid JSON");
+  if (request.is_object() && !request.contains("pipeline")) request["pipeline"] = "single";
+  JsonObject r(request, "");
+  RenderSpec spec = read_render_spec(r, request, options_);
+  r.finish();
+  // The scene's JSON, for the job's identity.
+  nlohmann::json scene_json;
+  if (request.contains("scene")) {
+    scene_json = request["scene"];
+  } else {
+    std::ifstream in(options_.scenes_dir / (request["scene_name"].get<std::string>() + ".json"));
+    scene_json = nlohmann::json::parse(in, nullptr, false);
+  }
+  auto scene = std::make_shared<const Scene>(std::move(spec.scene));
+  const std::string pipeline = spec.pipeline;
+  const Settings settings = spec.settings;
+  // Checked here on the network thread with a pipeline of its own (plan() needs no GPU), so that a
+  // typo is a 400 and a POST never waits behind a running bake on the render thread.
+  std::vector<std::pair<std::string, double>> stages;
+  {
+    gpu::Gpu unused;  // contexts are made on first use, and plan() makes none
+    auto p = make_pipeline(pipeline, unused);
+    p->plan(*scene, {p->supported_terms().front(), settings, nullptr});
+    stages = p->bake_stages();
+  }
+  if (stages.empty()) throw ValidationError("pipeline", "pipeline " + pipeline + " needs no bake");
+  nlohmann::json identity = {{"pipeline", pipeline}, {"settings", settings}, {"scene", bake_identity(scene_json)}};
+  bool created = false;
+  auto job = bakes_.submit(identity.dump(), pipeline, stages, [&](std::shared_ptr<BakeJob> j) {
+    spdlog::info("event=bake_queued id={} pipeline={}", j->id(), pipeline);
+    queue_.submit([j, scene, pipeline, settings](RenderQueue::Context& c) {
+      j->run([&](const BakeProgress& progress) {
+        Pipeline& p = c.pipeline(pipeline);
+        return p.bake(*scene, {p.supported_terms().front(), settings, nullptr}, progress);
+      });
+      nlohmann::json s = j->status();
+      spdlog::info("event=bake_finished id={} state={} cache_hit={} seconds={}", j->id(), s["state"].get<std::string>(),
+                   s.value("cache_hit", false), s.value("seconds", 0.0));
+      return 0;
+    });
+  }, &created);
+  HttpResponse response = json_response(job->status(), created ? 202 : 200);
+  response.headers.push_back({"Location", "/api/bakes/" + job->id()});
+  return response;
+}
+
+HttpResponse Api::bakes(const HttpRequest& request, const std::string& path) {
+  if (path == "/api/bakes") {
+    if (request.method == "POST") return create_bake(request.body);
+    if (request.method == "GET") {
+      nlohmann::json list = nlohmann::json::array();
+      for (const auto& j : bakes_.list()) list.push_back(j->status());
+      return json_response({{"bakes", list}});
+    }
+    return error(405, request.method + " is not allowed on /api/bakes: use POST or GET");
+  }
+  std::string id = path.substr(std::string("/api/bakes/").size());
+  auto job = bakes_.find(id);
+  if (!job) return error(404, "no bake job " + id);
+  if (request.method == "GET") return json_response(job->status());
+  if (request.method == "DELETE") {
+    if (!job->cancel()) return error(409, "bake job " + id + " has already " + (job->state() == BakeJob::State::Done ? "finished" : to_string(job->state())));
+    return json_response(job->status(), 202);
+  }
+  return error(405, request.method + " is not allowed on /api/bakes/{id}: use GET or DELETE");
+}
+
+}  // namespace scatter::server
