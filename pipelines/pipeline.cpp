@@ -5,6 +5,8 @@
 #include <sstream>
 
 #include "pipelines/auto_pipeline.hpp"
+#include "pipelines/lbl/lbl_pipeline.hpp"
+#include "pipelines/psf/psf_pipeline.hpp"
 #include "pipelines/reference/reference_pipeline.hpp"
 #include "pipelines/surface/surface_pipeline.hpp"
 #include "pipelines/single/single_pipeline.hpp"
@@ -62,7 +64,7 @@ void SettingsReader::finish() const {
       throw ValidationError("settings." + key, "is not a setting of pipeline " + pipeline_);
 }
 
-std::vector<std::string> pipeline_names() { return {"auto", "surface", "reference", "thickness", "single"}; }
+std::vector<std::string> pipeline_names() { return {"auto", "surface", "reference", "thickness", "single", "psf", "lbl"}; }
 
 std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu, BakeCache* cache) {
   if (name == "auto") return std::make_unique<AutoPipeline>(gpu, cache);
@@ -70,6 +72,8 @@ std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu, 
   if (name == "reference") return std::make_unique<ReferencePipeline>(gpu);
   if (name == "thickness") return std::make_unique<ThicknessPipeline>(gpu);
   if (name == "single") return std::make_unique<SinglePipeline>(gpu, cache);
+  if (name == "psf") return std::make_unique<PsfPipeline>(gpu);
+  if (name == "lbl") return std::make_unique<LblPipeline>(gpu);
   std::string list;
   for (const auto& n : pipeline_names()) list += (list.empty() ? "" : ", ") + n;
   throw ValidationError("pipeline", "unknown pipeline \"" + name + "\" (known: " + list + ")");

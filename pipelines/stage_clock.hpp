@@ -18,6 +18,9 @@ class StageClock {
     out_.push_back({stage, std::chrono::duration<double, std::milli>(now - start_).count()});
     start_ = now;
   }
+  // Starts the next stage now, without recording the time since the last stop (for stages the
+  // caller timed itself).
+  void restart() { start_ = std::chrono::steady_clock::now(); }
 
  private:
   std::vector<StageTime>& out_;

@@ -1,0 +1,64 @@
+// The point-spread-function model of multiple scattering (papers/psf-multiple-scattering.md), as
+// plain functions: the kernels in kernels/psf/march.cl evaluate the same formulas, and the tests
+// check these against the paper's limiting cases.
+//
+// Symbols (the paper's): a absorption, b scattering, c = a + b extinction coefficients; S the path
+// length, l = integral of b along the path (the number of scattering events); <theta^2> the mean
+// square scattering angle of the phase function; alpha = 1 / (4 (1 - g)).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+namespace scatter::psf {
+
+// Equation 2 for Henyey-Greenstein: 2 pi int_0^pi theta^2 P(theta) sin(theta) dtheta.
+// g = 0 gives (pi^2 - 4) / 2; g = 0.9 gives about 0.24, the paper's figure 4 value.
+double mean_square_angle(double g);
+
+// The curvature constant of equation 11 as Algorithm 2 uses it.
+double curvature_alpha(double g);
+
+// Equation 18 (equation 1 with the 2/3 correction, reparameterised by l = b S):
+//   w^2 = <theta^2> l S^2 / (24 (1 + <theta^2> (a/b) l^2 / 12)).
+// The paper's 8/b shift: blurring starts after 8 scattering events, so l and S enter shifted,
+// l' = max(l - shift, 0) and S' = S l' / l (the same fraction of the length). shift 0 is the bare
+// formula. Returns w^2 (squared length).
+double blur_width2(double theta2, double ell, double S, double a_over_b, double shift = 8.0);
+
+// P_MS(l, theta) = P(theta / k) / N(l), k = sqrt(l / (1 - exp(-l))) (Tessendorf and Wasson),
+// N(l) = int P(theta / k) d omega so that P_MS integrates to one over the sphere.
+struct PmsTable {
+  double g = 0;
+  double log_min = 0, log_max = 0;  // ln(l) range covered; outside, the end values
+  std::vector<float> inv_norm;      // 1 / N(l) at log-spaced l
+  double inv_norm_at(double ell) const;  // linear in ln(l)
+};
+PmsTable pms_table(double g, int entries = 96, double ell_min = 1e-3, double ell_max = 1e4);
+double pms_stretch(double ell);  // k(l)
+// P_MS from the table (what the kernel does).
+double pms(const PmsTable& table, double ell, double theta);
+// N(l) by direct quadrature, independent of the table.
+double pms_norm(double g, double ell, int steps = 4096);
+
+// The pyramid's widths: level 0 is the source itself (width 0); level k >= 1 has voxels 2^k times
+// the source's and the total Gaussian width `level_width` * 2^k source voxels. Building level k
+// from k - 1 downsamples by 2 with the tent [1 3 3 1] / 8 (variance 0.75 of the finer voxel^2) and
+// then blurs with a Gaussian of `level_sigma(k)` coarse voxels, so the widths add up exactly.
+constexpr double kLevelWidth = 1.0;
+double level_width(int level);  // in source voxels
+double level_sigma(int level);  // in voxels of `level`
+
+// CPU versions of the pyramid's two operations on an nx * ny * nz grid of RGB (3 floats per voxel),
+// for the tests: the tent downsample to ceil(n/2), and the separable Gaussian blur (zero outside),
+// truncated at ceil(3 sigma) with weights summing to one.
+struct Volume3 {
+  int nx = 0, ny = 0, nz = 0;
+  std::vector<float> rgb;
+  std::size_t index(int i, int j, int k) const { return (std::size_t(k) * ny + j) * nx + i; }
+};
+Volume3 downsample_tent(const Volume3& v);
+Volume3 blur_gaussian(const Volume3& v, double sigma);
+std::vector<float> gaussian_taps(double sigma);  // taps[0] is the centre, taps[i] = taps[-i]
+
+}  // namespace scatter::psf

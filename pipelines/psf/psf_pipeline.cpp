@@ -1,0 +1,184 @@
+#include "pipelines/psf/psf_pipeline.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "pipelines/stage_clock.hpp"
+#include "scene/voxelizer.hpp"
+
+namespace scatter {
+namespace {
+
+template <class T>
+std::string_view bytes_of(const std::vector<T>& v) {
+  return {reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T)};
+}
+
+std::string medium_fingerprint(const Scene& scene) {
+  std::ostringstream s;
+  s.precision(17);
+  s << std::hash<std::string_view>{}(bytes_of(scene.mesh.positions)) << '|'
+    << std::hash<std::string_view>{}(bytes_of(scene.mesh.indices)) << '|'
+    << reinterpret_cast<uintptr_t>(scene.medium.density.get()) << '|' << scene.voxels << '|'
+    << scene.medium.g;
+  for (const Vec3* v : {&scene.medium.sigma_s, &scene.medium.sigma_a})
+    for (int c = 0; c < 3; ++c) s << ',' << (*v)[c];
+  return s.str();
+}
+
+std::string fmt(double v, int digits = 3) {
+  std::ostringstream s;
+  s.precision(digits);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+PsfSettings PsfSettings::read(const Settings& settings) {
+  SettingsReader r(settings, "psf");
+  PsfSettings s;
+  s.step = r.number("step", s.step, 0.05, 4);
+  s.spacing = r.number("spacing", s.spacing, 0.1, 10);
+  s.shift = r.number("shift", s.shift, 0, 100);
+  s.atten = r.integer("atten", s.atten, 0, 2);
+  s.thin = r.number("thin", s.thin, 0, 10);
+  r.finish();
+  return s;
+}
+
+void PsfPipeline::prepare(const Scene& scene) {
+  std::string fp = medium_fingerprint(scene);
+  if (medium_.cl && medium_.fingerprint == fp) return;
+  VoxelGrid grid = voxelize(scene, {.resolution = scene.voxels});
+  gpu::ClContext& cl = gpu_.cl();
+  medium_.lights.clear();
+  medium_.cl = std::make_unique<ClMedium>(upload_medium(cl, grid));
+  medium_.fingerprint = fp;
+  medium_.density = scene.medium.density;
+  float max_s = 0;
+  for (float v : grid.sigma_s) max_s = std::max(max_s, v);
+  thickness_ = double(max_s) * grid.voxel * std::max({grid.nx, grid.ny, grid.nz});
+  medium_.pms = psf::pms_table(scene.medium.g);
+  medium_.pms_buf = upload(cl, medium_.pms.inv_norm);
+}
+
+std::vector<std::string> PsfPipeline::light_keys(const Scene& scene) const {
+  std::vector<float> packed = pack_lights(scene.lights);
+  std::vector<std::string> keys;
+  for (size_t i = 0; i < scene.lights.size(); ++i)
+    keys.emplace_back(reinterpret_cast<const char*>(packed.data() + 16 * i), 16 * sizeof(float));
+  return keys;
+}
+
+Plan PsfPipeline::plan(const Scene& scene, const RenderRequest& request) {
+  require_terms(*this, request.terms);
+  PsfSettings s = PsfSettings::read(request.settings);
+  const bool held = medium_.cl && medium_.fingerprint == medium_fingerprint(scene);
+  prepare(scene);
+  Plan p{name(), request.terms, {}};
+  p.stages.push_back({"voxelize", !held, held ? "the medium is the one already held (camera or lights changed)"
+                                              : std::to_string(scene.voxels) + " voxels on the long side"});
+  const bool multiple = request.terms != Terms::Single;
+  const bool thin = thickness_ < s.thin;
+  int changed = 0;
+  for (const auto& key : light_keys(scene)) changed += medium_.lights.count(key) ? 0 : 1;
+  const int n = static_cast<int>(scene.lights.size());
+  std::string lights = std::to_string(changed) + " of " + std::to_string(n) + " lights";
+  p.stages.push_back({"light_volume", changed > 0,
+                      changed ? lights + " new or changed: transmittance, scattering events and length towards the light per voxel"
+                              : "every light's volume is held (camera-only change)"});
+  const bool need_pyramid = multiple && !thin;
+  p.stages.push_back({"pyramid", need_pyramid && changed > 0,
+                      !need_pyramid ? "the multiple term is not rendered"
+                      : changed     ? lights + ": Gaussian pyramid of the scattered light"
+                                    : "every light's pyramid is reused (camera-only change)"});
+  p.stages.push_back({"march_single", request.terms != Terms::Multiple,
+                      request.terms == Terms::Multiple ? "single term not requested"
+                                                       : "sub-steps of " + fmt(s.step) + " voxels, light volume trilinear"});
+  std::string ms_reason;
+  if (!multiple) ms_reason = "multiple term not requested";
+  else if (thin)
+    ms_reason = "optically thin (scattering thickness " + fmt(thickness_) + " < " + fmt(s.thin) +
+                "): multiple scattering is negligible";
+  else
+    ms_reason = "pyramid lookups at the equation-18 width, every " + fmt(s.spacing) +
+                " projected blur width; attenuation " +
+                (s.atten == 0 ? "over the whole path (paper)" : s.atten == 1 ? "of the view segment" : "by absorption only");
+  p.stages.push_back({"march_multiple", multiple && !thin, ms_reason});
+  if (scene.medium.ior != 1.0)
+    p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " + fmt(scene.medium.ior) + ")"});
+  p.stages.push_back({"readback", true, "linear RGB to the host"});
+  return p;
+}
+
+RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& request) {
+  RenderResult result;
+  PsfSettings s = PsfSettings::read(request.settings);
+  StageClock clock(result.timings);
+  result.plan = plan(scene, request);  // voxelizes and uploads when the medium changed
+  clock.stop("voxelize");
+  gpu::ClContext& cl = gpu_.cl();
+  auto& queue = cl.queue();
+  const ClMedium& m = *medium_.cl;
+  cl::Buffer lights = upload(cl, pack_lights(scene.lights));
+  cl::Buffer camera = upload(cl, pack_camera(scene.camera, scene.width, scene.height));
+
+  // Light volumes: build the new ones, drop those of lights no longer in the scene.
+  std::vector<std::string> keys = light_keys(scene);
+  std::map<std::string, psf::LightVolume> kept;
+  double light_ms = 0, pyramid_ms = 0;
+  for (size_t i = 0; i < keys.size(); ++i) {
+    auto it = medium_.lights.find(keys[i]);
+    if (it != medium_.lights.end()) {
+      kept.emplace(keys[i], std::move(it->second));
+      medium_.lights.erase(it);
+      continue;
+    }
+    if (kept.count(keys[i])) continue;
+    psf::LightVolume v = psf::build_light_volume(cl, m, lights, static_cast<int>(i));
+    light_ms += v.light_ms;
+    pyramid_ms += v.pyramid_ms;
+    ++light_builds_;
+    kept.emplace(keys[i], std::move(v));
+  }
+  medium_.lights = std::move(kept);
+  result.timings.push_back({"light_volume", light_ms});
+  result.timings.push_back({"pyramid", pyramid_ms});
+  clock.restart();
+
+  const int w = scene.width, h = scene.height;
+  const size_t floats = size_t(w) * h * 3;
+  std::vector<float> zeros(floats, 0.f);
+  cl::Buffer out(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float), zeros.data());
+  const bool thin = thickness_ < s.thin;
+  const int terms = (request.terms != Terms::Multiple ? 1 : 0) | (request.terms != Terms::Single && !thin ? 2 : 0);
+  const float g = static_cast<float>(scene.medium.g);
+  const float theta2 = static_cast<float>(psf::mean_square_angle(scene.medium.g));
+  const float alpha = static_cast<float>(psf::curvature_alpha(scene.medium.g));
+  cl::Kernel k(psf::program(cl), "psf_march");
+  for (size_t i = 0; i < keys.size() && terms; ++i) {
+    const psf::LightVolume& v = medium_.lights.at(keys[i]);
+    gpu::set_args(k, m.origin, m.voxel, m.nx, m.ny, m.nz, m.sigma_s, m.sigma_t, lights, static_cast<int>(i), g,
+                  camera, w, h, static_cast<float>(s.step), terms, v.l0, v.path, v.tau, v.pyramid.data,
+                  v.pyramid.levels, v.pyramid.widths, static_cast<int>(v.pyramid.layout.size()), medium_.pms_buf,
+                  static_cast<int>(medium_.pms.inv_norm.size()), static_cast<float>(medium_.pms.log_min),
+                  static_cast<float>(medium_.pms.log_max), theta2, alpha, static_cast<float>(s.shift), s.atten,
+                  static_cast<float>(s.spacing), out);
+    queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
+    if (request.progress) {
+      queue.finish();
+      request.progress(double(i + 1) / keys.size());
+    }
+  }
+  queue.finish();
+  clock.stop("march");
+  result.image = Image(w, h);
+  queue.enqueueReadBuffer(out, CL_TRUE, 0, floats * sizeof(float), result.image.rgb.data());
+  clock.stop("readback");
+  return result;
+}
+
+}  // namespace scatter

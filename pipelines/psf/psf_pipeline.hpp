@@ -1,0 +1,65 @@
+// The `psf` pipeline: Premoze et al.'s multiple scattering by a point-spread function
+// (papers/psf-multiple-scattering.md), with single scattering by fine ray marching of the same
+// light volume. Per light (kept while the light and the medium stay the same): the light volume
+// (unscattered light, scattering events and optical depth towards the light, per voxel) and the
+// Gaussian pyramid of its scattered source (pipelines/psf/light_pyramid.hpp). Per frame: one
+// march per light (kernels/psf/march.cl). A camera-only change reuses every pyramid; a moved
+// light rebuilds its own only. Refraction and Fresnel are neglected (straight rays).
+//
+// Settings: step (sub-step in voxels, 0.5), spacing (lookups per projected blur width, 1),
+// shift (the width formula's shift in scattering events, the paper's 8), atten (0 the paper's
+// weight exp(-(c/b) l) over the whole path, 1 the view segment only; 2 absorption only: see
+// kernels/psf/march.cl), thin (optical thickness below which the multiple term is skipped, 0.05).
+#pragma once
+
+#include <map>
+#include <memory>
+
+#include "pipelines/cl_scene.hpp"
+#include "pipelines/pipeline.hpp"
+#include "pipelines/psf/light_pyramid.hpp"
+#include "pipelines/psf/psf_model.hpp"
+
+namespace scatter {
+
+struct PsfSettings {
+  double step = 0.5;
+  double spacing = 1;
+  double shift = 8;
+  int atten = 0;
+  double thin = 0.05;
+  static PsfSettings read(const Settings& settings);
+};
+
+class PsfPipeline : public Pipeline {
+ public:
+  explicit PsfPipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
+  std::string name() const override { return "psf"; }
+  std::vector<Terms> supported_terms() const override { return {Terms::Single, Terms::Multiple, Terms::All}; }
+  Plan plan(const Scene& scene, const RenderRequest& request) override;
+  RenderResult render(const Scene& scene, const RenderRequest& request) override;
+
+  // For tests: light volumes built so far (each build of one light counts one).
+  int light_builds() const { return light_builds_; }
+  // The largest scattering optical thickness across the grid (max sigma_s x longest side).
+  double scattering_thickness() const { return thickness_; }
+
+ private:
+  struct Medium {
+    std::string fingerprint;
+    std::shared_ptr<const DensityField> density;  // keeps the fingerprinted address taken
+    std::unique_ptr<ClMedium> cl;
+    std::map<std::string, psf::LightVolume> lights;  // by the light's packed parameters
+    psf::PmsTable pms;
+    cl::Buffer pms_buf;
+  };
+  void prepare(const Scene& scene);  // voxelizes and uploads unless the medium is the one held
+  std::vector<std::string> light_keys(const Scene& scene) const;
+
+  gpu::Gpu& gpu_;
+  Medium medium_;
+  double thickness_ = 0;
+  int light_builds_ = 0;
+};
+
+}  // namespace scatter
