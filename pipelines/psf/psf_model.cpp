@@ -77,10 +77,16 @@ double pms(const PmsTable& table, double ell, double theta) {
 
 double level_width(int level) { return level <= 0 ? 0.0 : kLevelWidth * std::ldexp(1.0, level); }
 
+double stored_width(int level) {
+  if (level <= 0) return 0.0;
+  double w = level_width(level), v = std::ldexp(1.0, level);
+  return std::sqrt(w * w - kReconstruction * v * v);
+}
+
 double level_sigma(int level) {
   if (level <= 0) return 0.0;
   double fine = std::ldexp(1.0, level - 1), coarse = 2 * fine;  // voxel sizes in source voxels
-  double w1 = level_width(level), w0 = level_width(level - 1);
+  double w1 = stored_width(level), w0 = stored_width(level - 1);
   double var = w1 * w1 - w0 * w0 - 0.75 * fine * fine;
   if (var <= 0) throw std::logic_error("psf pyramid widths do not grow");
   return std::sqrt(var) / coarse;

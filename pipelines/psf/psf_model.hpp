@@ -34,7 +34,7 @@ struct PmsTable {
   std::vector<float> inv_norm;      // 1 / N(l) at log-spaced l
   double inv_norm_at(double ell) const;  // linear in ln(l)
 };
-PmsTable pms_table(double g, int entries = 96, double ell_min = 1e-3, double ell_max = 1e4);
+PmsTable pms_table(double g, int entries = 256, double ell_min = 1e-3, double ell_max = 1e4);
 double pms_stretch(double ell);  // k(l)
 // P_MS from the table (what the kernel does).
 double pms(const PmsTable& table, double ell, double theta);
@@ -42,12 +42,17 @@ double pms(const PmsTable& table, double ell, double theta);
 double pms_norm(double g, double ell, int steps = 4096);
 
 // The pyramid's widths: level 0 is the source itself (width 0); level k >= 1 has voxels 2^k times
-// the source's and the total Gaussian width `level_width` * 2^k source voxels. Building level k
-// from k - 1 downsamples by 2 with the tent [1 3 3 1] / 8 (variance 0.75 of the finer voxel^2) and
-// then blurs with a Gaussian of `level_sigma(k)` coarse voxels, so the widths add up exactly.
+// the source's and, as the march reads it (trilinear), the total Gaussian width `level_width(k)` =
+// kLevelWidth * 2^k source voxels. Trilinear reconstruction adds on average the variance of the
+// tent of one voxel, 1/6 voxel^2 (kReconstruction), so the stored samples hold the source blurred
+// by `stored_width(k)`, sqrt(level_width^2 - voxel^2 / 6). Level k is level k - 1 downsampled by 2
+// with the tent [1 3 3 1] / 8 (variance 0.75 of the finer voxel^2), then blurred with a Gaussian
+// of `level_sigma(k)` coarse voxels, so that the variances add up to stored_width(k)^2.
 constexpr double kLevelWidth = 1.0;
-double level_width(int level);  // in source voxels
-double level_sigma(int level);  // in voxels of `level`
+constexpr double kReconstruction = 1.0 / 6.0;
+double level_width(int level);   // in source voxels
+double stored_width(int level);  // in source voxels
+double level_sigma(int level);   // in voxels of `level`
 
 // CPU versions of the pyramid's two operations on an nx * ny * nz grid of RGB (3 floats per voxel),
 // for the tests: the tent downsample to ceil(n/2), and the separable Gaussian blur (zero outside),

@@ -1,0 +1,150 @@
+// The psf pipeline: its single term against a closed form and the reference marcher, its multiple
+// term against a CPU evaluation of the same formulas on a box's axis, what it keeps between frames,
+// and what it refuses.
+#include "pipelines/psf/psf_pipeline.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "../../test_util.hpp"
+#include "pipelines/metrics.hpp"
+#include "protocol/json_reader.hpp"
+#include "scene/voxelizer.hpp"
+
+namespace scatter {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+double hg(double c, double g) { return (1 - g * g) / (4 * kPi * std::pow(1 + g * g - 2 * g * c, 1.5)); }
+
+// Box [-1, 1]^3 lit from +z by a directional light of irradiance E, seen from +z along the axis.
+Scene axis_box(double sigma_s, double sigma_a, double g) {
+  nlohmann::json j = test::minimal_scene();
+  j["mesh"] = {{"shape", "box"}, {"size", {2, 2, 2}}};
+  j["medium"] = {{"sigma_s", sigma_s}, {"sigma_a", sigma_a}, {"g", g}};
+  j["lights"] = {{{"type", "directional"}, {"direction", {0, 0, -1}}, {"irradiance", 2.0}}};
+  j["camera"] = {{"position", {0, 0, 4}}, {"fov_deg", 30}};
+  j["image"] = {{"width", 9}, {"height", 9}};  // odd: the centre pixel's ray is the axis
+  j["voxels"] = 32;                            // voxel faces fall on the box's faces
+  return parse_scene(j, ".");
+}
+
+float centre(const Image& im, int c) { return im.rgb[3 * (4 * 9 + 4) + c]; }
+
+TEST(PsfPipeline, SingleTermOnTheAxisMatchesClosedForm) {
+  const double ss = 0.8, sa = 0.2, g = 0.3, st = ss + sa;
+  PsfPipeline p(test::shared_gpu());
+  RenderResult r = p.render(axis_box(ss, sa, g), {Terms::Single, {}});
+  // L = sigma_s p(-1) E (1 - exp(-4 sigma_t)) / (2 sigma_t): light and view both travel depth s.
+  double expected = ss * hg(-1, g) * 2.0 * (1 - std::exp(-4 * st)) / (2 * st);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(centre(r.image, c), expected, 0.01 * expected);
+}
+
+TEST(PsfPipeline, MultipleTermOnTheAxisMatchesTheModelOnTheCpu) {
+  // With a shift larger than any path's scattering events the blur width is zero, so the march
+  // reads the unblurred source and the term is, on the axis (theta = pi, l = 2 b s, S = 2 s):
+  //   int_0^2 e^(-c s) b E e^(-c s) P_MS(l, pi) exp(-alpha pi^2 / l) ds     (atten 1)
+  // and atten 0 multiplies the integrand by e^(-c s) once more (the light segment's extinction).
+  const double ss = 0.8, sa = 0.2, g = 0.3, st = ss + sa, E = 2.0;
+  psf::PmsTable t = psf::pms_table(g);
+  const double alpha = psf::curvature_alpha(g);
+  for (int atten : {0, 1}) {
+    double sum = 0;
+    const int n = 20000;
+    for (int i = 0; i < n; ++i) {
+      double s = (i + 0.5) * 2.0 / n, ell = 2 * ss * s;
+      double f = std::exp(-2 * st * s) * ss * E * psf::pms(t, ell, kPi) * std::exp(-alpha * kPi * kPi / ell);
+      sum += f * (atten == 0 ? std::exp(-st * s) : 1.0) * (2.0 / n);
+    }
+    PsfPipeline p(test::shared_gpu());
+    RenderResult r = p.render(axis_box(ss, sa, g), {Terms::Multiple, {{"shift", 100}, {"atten", atten}, {"step", 0.25}}});
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(centre(r.image, c), sum, 0.02 * sum) << "atten " << atten;
+  }
+}
+
+Scene small_sphere() {
+  Scene s = load_scene(test::source_path("scenes/sphere.json"));
+  s.width = s.height = 32;
+  s.voxels = 32;
+  return s;
+}
+
+TEST(PsfPipeline, SingleTermAgreesWithTheReferenceMarcher) {
+  Scene s = small_sphere();
+  PsfPipeline p(test::shared_gpu());
+  Image mine = p.render(s, {Terms::Single, {}}).image;
+  Image ref = make_pipeline("reference", test::shared_gpu())->render(s, {Terms::Single, {}}).image;
+  // The light volume is read trilinearly between voxel centres instead of marched exactly.
+  EXPECT_LT(relative_rmse(mine, ref, coverage_mask(s, voxelize(s, {.resolution = s.voxels}))), 0.02);
+}
+
+TEST(PsfPipeline, MultipleTermIsFiniteAndNonNegativeOnInhomogeneousScenes) {
+  for (const char* name : {"sphere", "layers"}) {
+    Scene s = load_scene(test::source_path(std::string("scenes/") + name + ".json"));
+    s.width = s.height = 24;
+    s.voxels = 24;
+    PsfPipeline p(test::shared_gpu());
+    Image m = p.render(s, {Terms::Multiple, {}}).image;
+    double sum = 0;
+    for (float v : m.rgb) {
+      ASSERT_TRUE(std::isfinite(v)) << name;
+      ASSERT_GE(v, 0.f) << name;
+      sum += v;
+    }
+    EXPECT_GT(sum, 0) << name;
+  }
+}
+
+TEST(PsfPipeline, KeepsLightVolumesAcrossCameraMovesAndRebuildsOnlyMovedLights) {
+  Scene s = small_sphere();
+  s.lights.push_back(s.lights[0]);
+  s.lights[1].position = {-3, 2, 1};
+  PsfPipeline p(test::shared_gpu());
+  RenderResult first = p.render(s, {Terms::All, {}});
+  EXPECT_EQ(p.light_builds(), 2);
+  s.camera.position = {0.5, 0.2, 4};  // camera only
+  RenderResult second = p.render(s, {Terms::All, {}});
+  EXPECT_EQ(p.light_builds(), 2);
+  ASSERT_GE(second.plan.stages.size(), 3u);
+  EXPECT_EQ(second.plan.stages[0].name, "voxelize");
+  EXPECT_FALSE(second.plan.stages[0].run);
+  EXPECT_FALSE(second.plan.stages[1].run);  // light_volume
+  EXPECT_FALSE(second.plan.stages[2].run);  // pyramid
+  s.lights[1].position = {-3, 2, 2};  // one light moves
+  RenderResult third = p.render(s, {Terms::All, {}});
+  EXPECT_EQ(p.light_builds(), 3);
+  EXPECT_NE(third.plan.stages[1].reason.find("1 of 2 lights"), std::string::npos) << third.plan.stages[1].reason;
+  // The same frame from a fresh pipeline: reusing volumes changes nothing.
+  PsfPipeline fresh(test::shared_gpu());
+  Image again = fresh.render(s, {Terms::All, {}}).image;
+  ASSERT_EQ(again.rgb.size(), third.image.rgb.size());
+  for (size_t i = 0; i < again.rgb.size(); ++i) ASSERT_FLOAT_EQ(again.rgb[i], third.image.rgb[i]);
+}
+
+TEST(PsfPipeline, SkipsTheMultipleTermInAnOpticallyThinMedium) {
+  Scene s = small_sphere();
+  s.medium.sigma_s = {0.005, 0.005, 0.005};
+  PsfPipeline p(test::shared_gpu());
+  RenderResult r = p.render(s, {Terms::Multiple, {}});
+  bool said = false;
+  for (const auto& st : r.plan.stages)
+    if (st.name == "march_multiple") said = !st.run && st.reason.find("optically thin") != std::string::npos;
+  EXPECT_TRUE(said);
+  for (float v : r.image.rgb) ASSERT_EQ(v, 0.f);
+  EXPECT_LT(p.scattering_thickness(), 0.05);
+}
+
+TEST(PsfPipeline, RefusesWhatItCannotRender) {
+  Scene s = small_sphere();
+  PsfPipeline p(test::shared_gpu());
+  EXPECT_THROW(p.render(s, {Terms::Surface, {}}), ValidationError);
+  EXPECT_THROW(p.render(s, {Terms::All, {{"atten", 3}}}), ValidationError);
+  EXPECT_THROW(p.render(s, {Terms::All, {{"spp", 4}}}), ValidationError);
+  EXPECT_THROW(p.render(s, {Terms::All, {{"step", 0}}}), ValidationError);
+}
+
+}  // namespace
+}  // namespace scatter
