@@ -1,0 +1,177 @@
+// Lattice-Boltzmann diffusion of the deposited light: 6 axis directions plus a rest state.
+// f holds, per node and direction d (0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z) and channel, the power
+// leaving the node along d after the node's collision; layout f[(d * 3 + ch) * N + node].
+// A step pulls a_d(r) = f_d(r - c_d) and collides (per channel, coefficients per node):
+//   f_d(r) = (1 - pt) a_d + (ps / 6) sum_j a_j + src / 6
+// with pt = 1 - exp(-sigma_t dx) and ps = pt sigma_s / sigma_t: every entry is in [0, 1] for any
+// density, and without absorption (ps = pt) a step conserves the total. The rest state is the
+// source (the power the light rays deposited), emitted evenly in the six directions each step.
+// irr(r) = w sum_j a_j is the power scattered in the node per step (w = sigma_s x the mean path
+// in the voxel), the multiple-scattering emission the view pass reads.
+// Edges: 0 open (nothing comes in), 1 reflecting (a closed box), 2 periodic.
+
+int3 lattice_dir(int d) {
+  int s = (d & 1) ? -1 : 1;
+  return (int3)(d / 2 == 0 ? s : 0, d / 2 == 1 ? s : 0, d / 2 == 2 ? s : 0);
+}
+
+int axis_of(int3 v, int a) { return a == 0 ? v.x : (a == 1 ? v.y : v.z); }
+
+void collide(__global const float* pt, __global const float* ps, __global const float* w,
+             __global const float* src, size_t node, float a[6][3], float out[6][3],
+             float irr[3]) {
+  for (int ch = 0; ch < 3; ++ch) {
+    float sum = a[0][ch] + a[1][ch] + a[2][ch] + a[3][ch] + a[4][ch] + a[5][ch];
+    float t = pt[3 * node + ch], s = ps[3 * node + ch];
+    float iso = (s * sum + src[3 * node + ch]) * (1.0f / 6.0f);
+    for (int d = 0; d < 6; ++d) out[d][ch] = (1.0f - t) * a[d][ch] + iso;
+    irr[ch] = w[3 * node + ch] * sum;
+  }
+}
+
+// One step over the whole grid (one work item per node, double-buffered f).
+__kernel void lattice_step(int nx, int ny, int nz, int edge_x, int edge_y, int edge_z,
+                           __global const float* pt, __global const float* ps,
+                           __global const float* w, __global const float* src,
+                           __global const float* f_in, __global float* f_out,
+                           __global float* irr) {
+  int3 r = (int3)(get_global_id(0), get_global_id(1), get_global_id(2));
+  if (r.x >= nx || r.y >= ny || r.z >= nz) return;
+  int3 dims = (int3)(nx, ny, nz), edges = (int3)(edge_x, edge_y, edge_z);
+  size_t n = (size_t)nx * ny * nz, node = ((size_t)r.z * ny + r.y) * nx + r.x;
+  float a[6][3], out[6][3], e[3];
+  for (int d = 0; d < 6; ++d) {
+    int axis = d / 2;
+    int3 s = r - lattice_dir(d);
+    int sa = axis_of(s, axis), dim = axis_of(dims, axis), edge = axis_of(edges, axis);
+    bool outside = sa < 0 || sa >= dim;
+    if (outside && edge == 2) {
+      sa = (sa + dim) % dim;
+      s = (int3)(axis == 0 ? sa : s.x, axis == 1 ? sa : s.y, axis == 2 ? sa : s.z);
+      outside = false;
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+      if (!outside)
+        a[d][ch] = f_in[(d * 3 + ch) * n + ((size_t)s.z * ny + s.y) * nx + s.x];
+      else
+        a[d][ch] = edge == 1 ? f_in[((d ^ 1) * 3 + ch) * n + node] : 0.0f;
+    }
+  }
+  collide(pt, ps, w, src, node, a, out, e);
+  for (int d = 0; d < 6; ++d)
+    for (int ch = 0; ch < 3; ++ch) f_out[(d * 3 + ch) * n + node] = out[d][ch];
+  for (int ch = 0; ch < 3; ++ch) irr[3 * node + ch] = e[ch];
+}
+
+#ifdef LBL_B
+#define B3 (LBL_B * LBL_B * LBL_B)
+
+// The paper's blocked form: one work group per block of LBL_B^3 nodes keeps f in local memory
+// and runs `inner` steps; what leaves through a block face is averaged over those steps into the
+// interface buffer (6 faces x LBL_B^2 nodes x 3 channels per block), which the neighbour reads
+// as its inflow during the next launch. iface_in and iface_out alternate between launches. With
+// inner = 1 this is exactly lattice_step; with more, inflow lags by a launch (the steady state
+// is the same). Edges: open or reflecting.
+__kernel void lattice_blocked(int nx, int ny, int nz, int edge_x, int edge_y, int edge_z,
+                              __global const float* pt, __global const float* ps,
+                              __global const float* w, __global const float* src,
+                              __global const float* f_in, __global float* f_out,
+                              __global float* irr, __global const float* iface_in,
+                              __global float* iface_out, int inner) {
+  __local float lf[18 * B3];
+  int3 l = (int3)(get_local_id(0), get_local_id(1), get_local_id(2));
+  int3 blk = (int3)(get_group_id(0), get_group_id(1), get_group_id(2));
+  int3 nb = (int3)(nx / LBL_B, ny / LBL_B, nz / LBL_B);
+  int3 r = blk * LBL_B + l, edges = (int3)(edge_x, edge_y, edge_z);
+  size_t n = (size_t)nx * ny * nz, node = ((size_t)r.z * ny + r.y) * nx + r.x;
+  int ln = (l.z * LBL_B + l.y) * LBL_B + l.x;
+  size_t block = ((size_t)blk.z * nb.y + blk.y) * nb.x + blk.x;
+  for (int k = 0; k < 18; ++k) lf[k * B3 + ln] = f_in[k * n + node];
+  // Inflow from outside the block, fixed for this launch: 0 none, 1 interface, 2 reflect.
+  int kind[6];
+  float ext[6][3], acc[6][3];
+  for (int d = 0; d < 6; ++d) {
+    int axis = d / 2;
+    int3 c = lattice_dir(d);
+    int la = axis_of(l - c, axis);
+    int face = axis == 0 ? l.z * LBL_B + l.y : (axis == 1 ? l.z * LBL_B + l.x : l.y * LBL_B + l.x);
+    kind[d] = 0;
+    for (int ch = 0; ch < 3; ++ch) ext[d][ch] = acc[d][ch] = 0.0f;
+    if (la >= 0 && la < LBL_B) continue;  // inside the block
+    int3 src_blk = blk - c;
+    int ba = axis_of(src_blk, axis);
+    if (ba >= 0 && ba < axis_of(nb, axis)) {
+      kind[d] = 1;
+      size_t sb = ((size_t)src_blk.z * nb.y + src_blk.y) * nb.x + src_blk.x;
+      for (int ch = 0; ch < 3; ++ch)
+        ext[d][ch] = iface_in[((sb * 6 + d) * LBL_B * LBL_B + face) * 3 + ch];
+    } else if (axis_of(edges, axis) == 1) {
+      kind[d] = 2;
+    }
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  float a[6][3], out[6][3], e[3];
+  for (int step = 0; step < inner; ++step) {
+    for (int d = 0; d < 6; ++d) {
+      int3 s = l - lattice_dir(d);
+      int sa = axis_of(s, d / 2);
+      bool in_block = sa >= 0 && sa < LBL_B;
+      int sn = (s.z * LBL_B + s.y) * LBL_B + s.x;
+      for (int ch = 0; ch < 3; ++ch)
+        a[d][ch] = in_block ? lf[(d * 3 + ch) * B3 + sn]
+                            : (kind[d] == 1 ? ext[d][ch]
+                                            : (kind[d] == 2 ? lf[((d ^ 1) * 3 + ch) * B3 + ln] : 0.0f));
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    collide(pt, ps, w, src, node, a, out, e);
+    for (int d = 0; d < 6; ++d) {
+      int la = axis_of(l + lattice_dir(d), d / 2);
+      bool leaves = la < 0 || la >= LBL_B;
+      for (int ch = 0; ch < 3; ++ch) {
+        lf[(d * 3 + ch) * B3 + ln] = out[d][ch];
+        if (leaves) acc[d][ch] += out[d][ch];
+      }
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  for (int k = 0; k < 18; ++k) f_out[k * n + node] = lf[k * B3 + ln];
+  for (int ch = 0; ch < 3; ++ch) irr[3 * node + ch] = e[ch];
+  for (int d = 0; d < 6; ++d) {
+    int axis = d / 2;
+    int la = axis_of(l + lattice_dir(d), axis);
+    if (la >= 0 && la < LBL_B) continue;
+    int face = axis == 0 ? l.z * LBL_B + l.y : (axis == 1 ? l.z * LBL_B + l.x : l.y * LBL_B + l.x);
+    for (int ch = 0; ch < 3; ++ch)
+      iface_out[((block * 6 + d) * LBL_B * LBL_B + face) * 3 + ch] = acc[d][ch] / inner;
+  }
+}
+
+// Fills the interface buffer from f (what each face node sends out of its block), so that a
+// state written from the host is seen by the neighbouring blocks as the global form sees it.
+__kernel void lattice_interfaces(int nx, int ny, int nz, __global const float* f,
+                                 __global float* iface) {
+  int3 l = (int3)(get_local_id(0), get_local_id(1), get_local_id(2));
+  int3 blk = (int3)(get_group_id(0), get_group_id(1), get_group_id(2));
+  int3 nb = (int3)(nx / LBL_B, ny / LBL_B, nz / LBL_B);
+  int3 r = blk * LBL_B + l;
+  size_t n = (size_t)nx * ny * nz, node = ((size_t)r.z * ny + r.y) * nx + r.x;
+  size_t block = ((size_t)blk.z * nb.y + blk.y) * nb.x + blk.x;
+  for (int d = 0; d < 6; ++d) {
+    int axis = d / 2;
+    int la = axis_of(l + lattice_dir(d), axis);
+    if (la >= 0 && la < LBL_B) continue;
+    int face = axis == 0 ? l.z * LBL_B + l.y : (axis == 1 ? l.z * LBL_B + l.x : l.y * LBL_B + l.x);
+    for (int ch = 0; ch < 3; ++ch)
+      iface[((block * 6 + d) * LBL_B * LBL_B + face) * 3 + ch] = f[(d * 3 + ch) * n + node];
+  }
+}
+#endif
+
+// Partial sums of `count` floats: work item i adds elements i, i + items, ... (for the total
+// energy; the host adds the partials in double).
+__kernel void partial_sums(__global const float* data, ulong count, __global float* partial) {
+  size_t i = get_global_id(0), items = get_global_size(0);
+  float s = 0.0f;
+  for (size_t k = i; k < count; k += items) s += data[k];
+  partial[i] = s;
+}

@@ -1,0 +1,108 @@
+// Light marching: each work item carries one light ray (start just outside the medium, unit
+// direction, RGB power in watts) through the material volume and deposits, in every voxel it
+// crosses, the power scattered there out of the ray. For a piece of path of length ds inside a
+// voxel with coefficients sigma_s, sigma_t and power P entering it (Beer-Lambert):
+//   scattered  P (sigma_s / sigma_t) (1 - exp(-sigma_t ds))
+//   remaining  P exp(-sigma_t ds)
+// Straight rays (constant n) cross the voxels exactly (DDA); bent rays take fixed steps of the
+// ray equation (coefficients of the voxel holding the step's midpoint). The scattered power is
+// splatted trilinearly around the piece's midpoint; deposits from concurrent rays add through a
+// compare-and-swap loop (atomic_add_float).
+
+// A ray record: origin (3), unit direction (3), power (3), unused (3).
+#define RAY_FLOATS 12
+
+// Adds `amount` at p spread over the 8 voxels around it with trilinear weights (centres clamped
+// to the grid, so nothing is lost at its edges): a regular lattice of rays then deposits evenly
+// instead of beating against the voxel lattice.
+void splat(const Grid* g, float3 p, int ch, float amount, __global float* deposit) {
+  float3 q = clamp((p - g->origin) / g->voxel - 0.5f, (float3)(0.0f),
+                   (float3)(g->nx - 1, g->ny - 1, g->nz - 1));
+  int3 c0 = convert_int3(floor(q));
+  int3 c1 = min(c0 + 1, (int3)(g->nx - 1, g->ny - 1, g->nz - 1));
+  float3 f = q - convert_float3(c0);
+  for (int corner = 0; corner < 8; ++corner) {
+    float w = ((corner & 1) ? f.x : 1.0f - f.x) * ((corner & 2) ? f.y : 1.0f - f.y) *
+              ((corner & 4) ? f.z : 1.0f - f.z);
+    if (w <= 0.0f) continue;
+    int3 c = (int3)((corner & 1) ? c1.x : c0.x, (corner & 2) ? c1.y : c0.y, (corner & 4) ? c1.z : c0.z);
+    atomic_add_float(deposit + 3 * voxel_index(g, c.x, c.y, c.z) + ch, w * amount);
+  }
+}
+
+// Beer-Lambert over a piece of length ds in voxel c; the scattered power is splatted at `mid`.
+void deposit_piece(const Grid* g, __global const float* sigma_s, __global const float* sigma_t,
+                   int3 c, float3 mid, float ds, float3* power, __global float* deposit) {
+  int v = 3 * voxel_index(g, c.x, c.y, c.z);
+  float p[3] = {power->x, power->y, power->z};
+  for (int ch = 0; ch < 3; ++ch) {
+    float st = sigma_t[v + ch];
+    if (st <= 0.0f) continue;
+    float keep = exp(-st * ds);
+    float scattered = p[ch] * (sigma_s[v + ch] / st) * (1.0f - keep);
+    if (scattered > 0.0f) splat(g, mid, ch, scattered, deposit);
+    p[ch] *= keep;
+  }
+  *power = (float3)(p[0], p[1], p[2]);
+}
+
+__kernel void march_rays(float3 origin, float voxel, int nx, int ny, int nz,
+                         __global const float* sigma_s, __global const float* sigma_t,
+                         __global const float* n_field, __global const float* grad_field,
+                         __global const float* rays, int ray_count, int bend, float delta,
+                         float cutoff, __global float* deposit) {
+  int r = get_global_id(0);
+  if (r >= ray_count) return;
+  Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
+  __global const float* ray = rays + RAY_FLOATS * r;
+  float3 o = (float3)(ray[0], ray[1], ray[2]);
+  float3 d = (float3)(ray[3], ray[4], ray[5]);
+  float3 power = (float3)(ray[6], ray[7], ray[8]);
+  float start = fmax(power.x, fmax(power.y, power.z)), stop = cutoff * start;
+  float t0, t1;
+  if (start <= 0.0f || !grid_interval(&g, o, d, &t0, &t1)) return;
+  if (!bend) {
+    Dda s;
+    dda_init(&s, o, d, g.origin, g.voxel, (int3)(nx, ny, nz), t0, t1);
+    float a, b;
+    int3 c;
+    while (dda_next(&s, &a, &b, &c) && fmax(power.x, fmax(power.y, power.z)) > stop)
+      deposit_piece(&g, sigma_s, sigma_t, c, o + d * (0.5f * (a + b)), b - a, &power, deposit);
+    return;
+  }
+  float3 x = o + d * t0;
+  float n;
+  trilinear(&g, n_field, 1, x, &n);
+  float3 v = n * d;
+  int max_steps = (int)(4.0f * (nx + ny + nz) * voxel / delta) + 8;
+  for (int i = 0; i < max_steps && fmax(power.x, fmax(power.y, power.z)) > stop; ++i) {
+    float3 x0 = x;
+    float ds = eikonal_step(&g, n_field, grad_field, delta, &x, &v);
+    int3 c = voxel_of(&g, 0.5f * (x0 + x));
+    if (!inside_grid(&g, c)) break;
+    deposit_piece(&g, sigma_s, sigma_t, c, 0.5f * (x0 + x), ds, &power, deposit);
+  }
+}
+
+// The positions of `steps` Eikonal steps from each ray's origin (no deposit): for checking the
+// integrator against closed forms. out: 3 floats per step per ray.
+__kernel void eikonal_trace(float3 origin, float voxel, int nx, int ny, int nz,
+                            __global const float* n_field, __global const float* grad_field,
+                            __global const float* rays, int ray_count, float delta, int steps,
+                            __global float* out) {
+  int r = get_global_id(0);
+  if (r >= ray_count) return;
+  Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
+  __global const float* ray = rays + RAY_FLOATS * r;
+  float3 x = (float3)(ray[0], ray[1], ray[2]);
+  float n;
+  trilinear(&g, n_field, 1, x, &n);
+  float3 v = n * (float3)(ray[3], ray[4], ray[5]);
+  for (int i = 0; i < steps; ++i) {
+    eikonal_step(&g, n_field, grad_field, delta, &x, &v);
+    __global float* o = out + 3 * ((size_t)r * steps + i);
+    o[0] = x.x;
+    o[1] = x.y;
+    o[2] = x.z;
+  }
+}

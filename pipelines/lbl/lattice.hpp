@@ -1,0 +1,69 @@
+// The lattice-Boltzmann diffusion of the lbl pipeline (kernels/lbl/lattice.cl): 6 axis directions
+// and a rest state holding the light rays' deposit, stepped either over the whole grid at once
+// (the global form) or in blocks of b^3 nodes that talk through interface buffers (the paper's
+// form), until the irradiance at a few probes and the total energy stop changing.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "gpu/cl_context.hpp"
+#include "pipelines/lbl/volume.hpp"
+
+namespace scatter::lbl {
+
+enum class Edge { Open = 0, Reflect = 1, Periodic = 2 };
+
+struct LatticeOptions {
+  bool blocked = true;  // the paper's blocks; false: one work item per node over the whole grid
+  int block = 4;        // b (blocked): the grid's sides must be multiples of it
+  int inner = 1;        // steps per launch inside a block (blocked); 1 matches the global form
+  std::array<Edge, 3> edges{Edge::Open, Edge::Open, Edge::Open};  // periodic: global form only
+};
+
+struct Convergence {
+  int steps = 0;          // lattice steps taken by this call
+  bool converged = false;
+  double change = 0;      // the last relative change measured
+};
+
+class Lattice {
+ public:
+  // Throws std::invalid_argument for sides that are not whole blocks or a periodic blocked edge.
+  Lattice(gpu::ClContext& cl, const LatticeCoefficients& c, LatticeOptions options);
+
+  // Zeroes the state (f and interfaces); the source stays.
+  void clear();
+  // The power deposited per node per step (3 floats per node, same layout as the volume).
+  void set_source(const cl::Buffer& deposit);
+  void set_source(const std::vector<float>& deposit);
+  // f as 18 floats per node: f[(d * 3 + ch) * N + node], d = +x, -x, +y, -y, +z, -z.
+  void set_state(const std::vector<float>& f);
+  std::vector<float> state();
+
+  // Runs at least `steps` lattice steps (whole launches of `inner` steps when blocked).
+  int step(int steps);
+  // Sum of f over nodes, directions and channels.
+  double energy();
+  // Power scattered per node per step, 3 floats per node.
+  std::vector<float> irradiance();
+  const cl::Buffer& irradiance_buffer() const { return irr_; }
+  size_t nodes() const { return n_; }
+
+  // Steps until, between checks `check_every` steps apart, the relative change of the probes'
+  // irradiance and of the total energy are both under `tolerance`, or `max_steps` are done.
+  Convergence converge(double tolerance, int max_steps, int check_every);
+
+ private:
+  gpu::ClContext& cl_;
+  LatticeOptions o_;
+  int nx_, ny_, nz_;
+  size_t n_;
+  cl::Buffer pt_, ps_, w_, src_, irr_, partial_;
+  cl::Buffer f_[2], iface_[2];
+  int cur_ = 0;  // f_[cur_] and iface_[cur_] hold the current state
+  cl::Kernel step_kernel_, sum_kernel_;
+  std::vector<size_t> probes_;  // node indices inside the medium
+};
+
+}  // namespace scatter::lbl

@@ -1,0 +1,264 @@
+#include "pipelines/lbl/lbl_pipeline.hpp"
+
+#include <cmath>
+
+#include "bake/cache.hpp"
+#include "pipelines/cl_scene.hpp"
+#include "pipelines/lbl/light_rays.hpp"
+#include "pipelines/stage_clock.hpp"
+#include "protocol/json_reader.hpp"
+
+namespace scatter {
+namespace {
+
+template <class T>
+std::string_view bytes_of(const std::vector<T>& v) {
+  return {reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T)};
+}
+
+// What the material volume and the lattice depend on: the asset, its medium, the grid, and the
+// settings that shape them (not the lights, not the camera).
+std::string material_key(const Scene& scene, const LblSettings& s) {
+  BakeKey k;
+  k.add_bytes("positions", bytes_of(scene.mesh.positions)).add_bytes("indices", bytes_of(scene.mesh.indices));
+  // The density object is held by the state while compared, so its address is not reused.
+  k.add("density", std::to_string(reinterpret_cast<uintptr_t>(scene.medium.density.get())));
+  for (int c = 0; c < 3; ++c) k.add("sigma_s", scene.medium.sigma_s[c]).add("sigma_a", scene.medium.sigma_a[c]);
+  k.add("g", scene.medium.g).add("ior", scene.medium.ior).add("voxels", scene.voxels);
+  k.add("smooth", s.smooth).add("blocked", s.blocked).add("block", s.block).add("inner", s.inner);
+  return k.hex();
+}
+
+std::string light_key(const Scene& scene, const LblSettings& s) {
+  BakeKey k;
+  for (const Light& l : scene.lights) {
+    k.add("type", double(int(l.type))).add("intensity", l.intensity);
+    k.add("inner", l.inner_deg).add("outer", l.outer_deg);
+    for (int c = 0; c < 3; ++c)
+      k.add("position", l.position[c]).add("direction", l.direction[c]).add("color", l.color[c]);
+  }
+  k.add("rays", s.rays).add("step", s.step).add("cutoff", s.cutoff);
+  return k.hex();
+}
+
+std::string diffusion_key(const LblSettings& s) {
+  BakeKey k;
+  k.add("tolerance", s.tolerance).add("max_steps", s.max_steps).add("check_every", s.check_every);
+  return k.hex();
+}
+
+// A scattered photon's chance to scatter again somewhere in the volume, at most.
+double second_scatter_bound(double max_sigma_s, double longest_side) {
+  return -std::expm1(-max_sigma_s * longest_side);
+}
+
+std::string fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+}  // namespace
+
+LblSettings LblSettings::read(const Settings& settings) {
+  SettingsReader r(settings, "lbl");
+  LblSettings s;
+  s.rays = r.number("rays", s.rays, 0.25, 8);
+  s.step = r.number("step", s.step, 0.05, 2);
+  s.smooth = r.number("smooth", s.smooth, 0, 4);
+  s.cutoff = r.number("cutoff", s.cutoff, 0, 0.5);
+  s.blocked = r.integer("blocked", 1, 0, 1) == 1;
+  s.block = r.integer("block", s.block, 1, 8);
+  s.inner = r.integer("inner", s.inner, 1, 16);
+  s.tolerance = r.number("tolerance", s.tolerance, 1e-6, 0.5);
+  s.max_steps = r.integer("max_steps", s.max_steps, 1, 1000000);
+  s.check_every = r.integer("check_every", s.check_every, 1, 1024);
+  s.warm = r.integer("warm", 1, 0, 1) == 1;
+  s.skip_multiple = r.number("skip_multiple", s.skip_multiple, 0, 1);
+  r.finish();
+  return s;
+}
+
+namespace lbl {
+
+struct State {
+  std::string material, lights, diffusion;  // keys of what is loaded
+  std::shared_ptr<const DensityField> density;  // keeps the keyed address alive
+  Volume volume;
+  ClVolume device;
+  std::unique_ptr<Lattice> lattice;
+  cl::Buffer deposit;
+  double max_sigma_s = 0;
+  bool diffused = false;  // the lattice has converged for the loaded deposit and settings
+};
+
+}  // namespace lbl
+
+namespace {
+
+// Which stages a frame runs, from the scene, the request and what the last frame left.
+struct Decision {
+  bool material = true, march = true, diffuse = true, multiple = true, single = true;
+  bool tiny = false, bend = false;
+  double bound = 1;
+  std::string bound_note;
+};
+
+Decision decide(const lbl::State* state, const Scene& scene, const RenderRequest& request,
+                const LblSettings& s) {
+  Decision d;
+  d.material = !state || state->material != material_key(scene, s);
+  d.march = d.material || state->lights != light_key(scene, s);
+  d.single = request.terms != Terms::Multiple;
+  d.multiple = request.terms != Terms::Single;
+  d.bend = scene.medium.ior != 1.0;
+  if (!d.material) {
+    const lbl::Volume& v = state->volume;
+    d.bound = second_scatter_bound(state->max_sigma_s, std::max({v.nx, v.ny, v.nz}) * v.voxel);
+    d.bend = !v.constant_n;
+  } else {
+    // Before the volume exists: the medium's coefficients at density 1 over the mesh's extent.
+    Aabb box;
+    for (const Vec3& p : scene.mesh.positions) box.add(p);
+    Vec3 size = box.size();
+    double ms = std::max({scene.medium.sigma_s.x, scene.medium.sigma_s.y, scene.medium.sigma_s.z});
+    d.bound = second_scatter_bound(ms, std::max({size.x, size.y, size.z}));
+    d.bound_note = " (estimated at density 1)";
+  }
+  d.tiny = d.bound < s.skip_multiple;
+  d.diffuse = d.multiple && !d.tiny &&
+              (d.march || !state->diffused || state->diffusion != diffusion_key(s));
+  return d;
+}
+
+StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
+  std::string why;
+  if (!d.multiple)
+    why = "the single term needs no diffusion";
+  else if (d.tiny)
+    why = "a scattered photon scatters again with chance at most " + fmt(d.bound) + d.bound_note +
+          " < skip_multiple " + fmt(s.skip_multiple) + ": multiple term taken as 0";
+  else if (!d.diffuse)
+    why = "camera-only change: converged irradiance kept";
+  else
+    why = std::string(s.blocked ? "blocks of " + std::to_string(s.block) + "^3, " +
+                                      std::to_string(s.inner) + " steps per launch"
+                                : "global lattice") +
+          ", 6 directions + rest, until the change is under " + fmt(s.tolerance) + " (at most " +
+          std::to_string(s.max_steps) + " steps)" +
+          (!d.material && s.warm ? ", warm start from the last state" : "");
+  return {"diffuse", d.diffuse, why};
+}
+
+Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Decision& d) {
+  Plan p{"lbl", terms, {}};
+  p.stages.push_back({"volume", d.material,
+                      d.material ? std::to_string(scene.voxels) + " voxels on the long side; n, grad n smoothed over " +
+                                       fmt(s.smooth) + " voxels"
+                                 : "material unchanged: volume kept"});
+  std::string path = d.bend ? "bent by the ray equation, step " + fmt(s.step) + " voxels"
+                            : "constant n: straight rays, exact voxel crossings (no gradient)";
+  p.stages.push_back({"march", d.march,
+                      d.march ? std::to_string(scene.lights.size()) + " lights, " + fmt(s.rays) +
+                                    " rays per voxel width, " + path + "; deposits added by CAS atomics"
+                              : "lights and material unchanged: deposit kept"});
+  p.stages.push_back(diffuse_stage(d, s));
+  std::string gathers = d.single && d.multiple ? "deposit + lattice" : (d.single ? "the deposit" : "the lattice");
+  std::string phase = scene.medium.g != 0 ? "; phase taken isotropic (g " + fmt(scene.medium.g) +
+                                                " enters the lattice as sigma_s (1 - g))"
+                                          : "";
+  p.stages.push_back({"view", true, std::string(d.bend ? "eye rays refracted by grad n" : "straight eye rays (DDA)") +
+                                        ", gathering " + gathers + phase});
+  p.stages.push_back({"readback", true, "linear RGB to the host"});
+  return p;
+}
+
+}  // namespace
+
+LblPipeline::LblPipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
+LblPipeline::~LblPipeline() = default;
+
+Plan LblPipeline::plan(const Scene& scene, const RenderRequest& request) {
+  require_terms(*this, request.terms);
+  LblSettings s = LblSettings::read(request.settings);
+  return make_plan(scene, request.terms, s, decide(state_.get(), scene, request, s));
+}
+
+RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& request) {
+  RenderResult result;
+  require_terms(*this, request.terms);
+  LblSettings s = LblSettings::read(request.settings);
+  StageClock clock(result.timings);
+  gpu::ClContext& cl = gpu_.cl();
+  auto& queue = cl.queue();
+  Decision d = decide(state_.get(), scene, request, s);
+  result.plan = make_plan(scene, request.terms, s, d);
+  if (d.material) {
+    auto next = std::make_unique<lbl::State>();
+    int margin = 1 + static_cast<int>(std::ceil(3 * s.smooth));
+    VoxelGrid grid = voxelize(scene, {.resolution = scene.voxels, .margin = margin});
+    next->volume = lbl::make_volume(grid, scene.medium.ior, s.smooth, s.blocked ? s.block : 1);
+    next->device = lbl::upload_volume(cl, next->volume);
+    for (float x : next->volume.sigma_s) next->max_sigma_s = std::max<double>(next->max_sigma_s, x);
+    lbl::LatticeOptions o{.blocked = s.blocked, .block = s.block, .inner = s.inner};
+    next->lattice = std::make_unique<lbl::Lattice>(cl, lbl::lattice_coefficients(next->volume, scene.medium.g), o);
+    next->deposit = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));
+    next->material = material_key(scene, s);
+    next->density = scene.medium.density;
+    state_ = std::move(next);
+    queue.finish();
+    clock.stop("volume");
+    // The skip test now reads the real volume.
+    Decision built = decide(state_.get(), scene, request, s);
+    d.tiny = built.tiny;
+    d.bound = built.bound;
+    d.bound_note.clear();
+    d.diffuse = d.multiple && !d.tiny;
+    result.plan.stages[2] = diffuse_stage(d, s);
+  }
+  lbl::State& st = *state_;
+  if (d.march) {
+    lbl::RaySet rays = lbl::light_rays(scene.lights, st.volume, s.rays, 4096);
+    cl::Buffer ray_buf = upload(cl, rays.rays);
+    queue.enqueueFillBuffer(st.deposit, 0.f, 0, 3 * st.volume.count() * sizeof(float));
+    lbl::march(cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff, st.deposit);
+    queue.finish();
+    st.lights = light_key(scene, s);
+    st.diffused = false;
+    clock.stop("march");
+  }
+  if (d.diffuse) {
+    if (!s.warm) st.lattice->clear();
+    st.lattice->set_source(st.deposit);
+    lbl::Convergence c = st.lattice->converge(s.tolerance, s.max_steps, s.check_every);
+    queue.finish();
+    st.diffused = true;
+    st.diffusion = diffusion_key(s);
+    for (auto& stage : result.plan.stages)
+      if (stage.name == "diffuse")
+        stage.reason += c.converged ? "; converged in " + std::to_string(c.steps) + " steps"
+                                    : "; stopped at the step bound after " + std::to_string(c.steps) +
+                                          " steps (change " + fmt(c.change) + ")";
+    clock.stop("diffuse");
+  }
+  const int w = scene.width, h = scene.height;
+  const size_t floats = size_t(w) * h * 3;
+  cl::Buffer camera = upload(cl, pack_camera(scene.camera, w, h));
+  cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, floats * sizeof(float));
+  cl::Kernel k(cl.program({"kernels/reference/common.cl", "kernels/lbl/common.cl", "kernels/lbl/view.cl"}),
+               "view_pass");
+  const float w_single = d.single ? 1.f : 0.f, w_multiple = d.multiple && !d.tiny ? 1.f : 0.f;
+  const lbl::ClVolume& v = st.device;
+  gpu::set_args(k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_t, v.n, v.grad, st.deposit,
+                st.lattice->irradiance_buffer(), w_single, w_multiple, camera, w, h, d.bend ? 1 : 0,
+                float(s.step * st.volume.voxel), out);
+  queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
+  queue.finish();
+  clock.stop("view");
+  result.image = Image(w, h);
+  queue.enqueueReadBuffer(out, CL_TRUE, 0, floats * sizeof(float), result.image.rgb.data());
+  clock.stop("readback");
+  return result;
+}
+
+}  // namespace scatter

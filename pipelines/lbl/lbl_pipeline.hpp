@@ -1,0 +1,68 @@
+// `lbl`: Bernabei et al.'s parallel architecture for scattering and refraction
+// (papers/lbl-scattering-refraction.md), in OpenCL.
+//
+//   volume   material volume from the voxel grid: sigma_s, sigma_t, n (ior blended by occupancy,
+//            Gaussian-smoothed) and grad n (pipelines/lbl/volume)
+//   march    light rays from every light deposit the power they scatter per voxel, bending by
+//            the ray equation where n varies (kernels/lbl/march.cl)
+//   diffuse  lattice-Boltzmann diffusion of the deposit, blocked, to convergence, warm-started
+//            from the last state (pipelines/lbl/lattice, kernels/lbl/lattice.cl)
+//   view     per pixel, the eye ray (refracted where n varies) gathers the deposit (single term)
+//            and the lattice's scattered power (multiple term) (kernels/lbl/view.cl)
+//
+// The volume, the deposit and the lattice's state are kept between frames: a camera-only change
+// runs only the view pass; a light change re-marches and warm-starts the lattice.
+//
+// Settings: rays (2) light rays per voxel width; step (0.5) Eikonal step in voxels; smooth (1)
+// Gaussian on n, in voxels; cutoff (1e-4) rays stop under this fraction of their power;
+// blocked (1) blocked or global lattice; block (4) b; inner (1) steps per block launch;
+// tolerance (1e-3) relative change that ends the diffusion; max_steps (20000); check_every (16);
+// warm (1) warm start; skip_multiple (1e-3) skip the lattice when a scattered photon's chance to
+// scatter again, 1 - exp(-max sigma_s x longest side), is under this.
+#pragma once
+
+#include <memory>
+#include <optional>
+
+#include "pipelines/lbl/lattice.hpp"
+#include "pipelines/lbl/volume.hpp"
+#include "pipelines/pipeline.hpp"
+
+namespace scatter {
+namespace lbl {
+struct State;
+}
+
+struct LblSettings {
+  double rays = 2;
+  double step = 0.5;
+  double smooth = 1;
+  double cutoff = 1e-4;
+  bool blocked = true;
+  int block = 4;
+  int inner = 1;
+  double tolerance = 1e-3;
+  int max_steps = 20000;
+  int check_every = 16;
+  bool warm = true;
+  double skip_multiple = 1e-3;
+  static LblSettings read(const Settings& settings);
+};
+
+class LblPipeline : public Pipeline {
+ public:
+  explicit LblPipeline(gpu::Gpu& gpu);
+  ~LblPipeline() override;
+  std::string name() const override { return "lbl"; }
+  std::vector<Terms> supported_terms() const override {
+    return {Terms::Single, Terms::Multiple, Terms::All};
+  }
+  Plan plan(const Scene& scene, const RenderRequest& request) override;
+  RenderResult render(const Scene& scene, const RenderRequest& request) override;
+
+ private:
+  gpu::Gpu& gpu_;
+  std::unique_ptr<lbl::State> state_;  // what the last frame left: volume, deposit, lattice
+};
+
+}  // namespace scatter
