@@ -67,7 +67,7 @@ LblSettings LblSettings::read(const Settings& settings) {
   s.step = r.number("step", s.step, 0.05, 2);
   s.smooth = r.number("smooth", s.smooth, 0, 4);
   s.cutoff = r.number("cutoff", s.cutoff, 0, 0.5);
-  s.blocked = r.integer("blocked", 1, 0, 1) == 1;
+  s.blocked = r.integer("blocked", 0, 0, 1) == 1;
   s.block = r.integer("block", s.block, 1, 8);
   s.inner = r.integer("inner", s.inner, 1, 16);
   s.tolerance = r.number("tolerance", s.tolerance, 1e-6, 0.5);
@@ -217,6 +217,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     result.plan.stages[2] = diffuse_stage(d, s);
   }
   lbl::State& st = *state_;
+  last_steps_ = 0;
   if (d.march) {
     lbl::RaySet rays = lbl::light_rays(scene.lights, st.volume, s.rays, 4096);
     cl::Buffer ray_buf = upload(cl, rays.rays);
@@ -234,6 +235,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     queue.finish();
     st.diffused = true;
     st.diffusion = diffusion_key(s);
+    last_steps_ = c.steps;
     for (auto& stage : result.plan.stages)
       if (stage.name == "diffuse")
         stage.reason += c.converged ? "; converged in " + std::to_string(c.steps) + " steps"

@@ -5,7 +5,7 @@
 //            Gaussian-smoothed) and grad n (pipelines/lbl/volume)
 //   march    light rays from every light deposit the power they scatter per voxel, bending by
 //            the ray equation where n varies (kernels/lbl/march.cl)
-//   diffuse  lattice-Boltzmann diffusion of the deposit, blocked, to convergence, warm-started
+//   diffuse  lattice-Boltzmann diffusion of the deposit (global or in blocks), to convergence, warm-started
 //            from the last state (pipelines/lbl/lattice, kernels/lbl/lattice.cl)
 //   view     per pixel, the eye ray (refracted where n varies) gathers the deposit (single term)
 //            and the lattice's scattered power (multiple term) (kernels/lbl/view.cl)
@@ -15,7 +15,8 @@
 //
 // Settings: rays (2) light rays per voxel width; step (0.5) Eikonal step in voxels; smooth (1)
 // Gaussian on n, in voxels; cutoff (1e-4) rays stop under this fraction of their power;
-// blocked (1) blocked or global lattice; block (4) b; inner (1) steps per block launch;
+// blocked (0) the paper's blocks with interface buffers (1) or the global lattice (0, faster
+// on the CPU device, see docs/BENCHMARKS.md); block (4) b; inner (1) steps per block launch;
 // tolerance (1e-3) relative change that ends the diffusion; max_steps (20000); check_every (16);
 // warm (1) warm start; skip_multiple (1e-3) skip the lattice when a scattered photon's chance to
 // scatter again, 1 - exp(-max sigma_s x longest side), is under this.
@@ -38,7 +39,7 @@ struct LblSettings {
   double step = 0.5;
   double smooth = 1;
   double cutoff = 1e-4;
-  bool blocked = true;
+  bool blocked = false;
   int block = 4;
   int inner = 1;
   double tolerance = 1e-3;
@@ -59,10 +60,13 @@ class LblPipeline : public Pipeline {
   }
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
+  // Lattice steps the last diffusion took (0 when the last frame did not diffuse).
+  int last_diffusion_steps() const { return last_steps_; }
 
  private:
   gpu::Gpu& gpu_;
   std::unique_ptr<lbl::State> state_;  // what the last frame left: volume, deposit, lattice
+  int last_steps_ = 0;
 };
 
 }  // namespace scatter

@@ -122,5 +122,49 @@ TEST(LblMarch, RaysCarryTheLightsPower) {
   EXPECT_GT(spot, 7 * 2 * pi * (1 - std::cos(5 * pi / 180)));
 }
 
+
+// n = a + k y: a ray leaving horizontally at y0 keeps n cos(theta) = n(y0) = C, and its path is
+// n(y(x)) = C cosh(k (x - x0) / C) (the paraxial limit is the parabola y0 + k (x - x0)^2 / (2 C)).
+// It bends towards the higher index; the explicit Euler steps converge to it at first order.
+TEST(LblMarch, RayInALinearIndexGradientFollowsTheClosedForm) {
+  const double a = 1.2, k = 0.2;
+  Volume v;
+  v.nx = 84;
+  v.ny = 44;
+  v.nz = 4;
+  v.voxel = 0.05;
+  v.origin = {-2.1, -1.1, -0.1};
+  v.sigma_s.assign(3 * v.count(), 0.f);
+  v.sigma_t.assign(3 * v.count(), 0.f);
+  std::vector<float> n(v.count());
+  for (int z = 0; z < v.nz; ++z)
+    for (int y = 0; y < v.ny; ++y)
+      for (int x = 0; x < v.nx; ++x) n[v.index(x, y, z)] = float(a + k * (v.origin.y + (y + 0.5) * v.voxel));
+  set_index(v, n, 0);
+  ASSERT_FALSE(v.constant_n);
+  ClVolume dv = upload_volume(cl(), v);
+  RaySet ray;
+  ray.rays = {-1.9f, 0.f, 0.f, 1.f, 0.f, 0.f, 1.f, 1.f, 1.f, 0.f, 0.f, 0.f};
+  const double c = a, length = 3.0;
+  auto max_error = [&](double step) {
+    int steps = int(std::lround(length / step));
+    std::vector<float> path = eikonal_trace(cl(), dv, ray, step, steps);
+    double worst = 0;
+    for (int i = 0; i < steps; ++i) {
+      double x = path[3 * i] + 1.9, y = path[3 * i + 1];
+      double expected = (c * std::cosh(k * x / c) - a) / k;
+      worst = std::max(worst, std::abs(y - expected));
+      EXPECT_NEAR(path[3 * i + 2], 0.0, 1e-6);
+    }
+    double x_end = path[3 * (steps - 1)] + 1.9;
+    EXPECT_NEAR(x_end, length, 0.05 * length);
+    EXPECT_GT(path[3 * (steps - 1) + 1], 0.7);  // bent up, towards the higher index
+    return worst;
+  };
+  double coarse = max_error(0.02), fine = max_error(0.01);
+  const double deflection = (c * std::cosh(k * length / c) - a) / k;  // 0.766
+  EXPECT_LT(fine, 0.01 * deflection);
+  EXPECT_LT(fine, 0.6 * coarse);  // first order: halving the step halves the error
+}
 }  // namespace
 }  // namespace scatter::lbl
