@@ -14,6 +14,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
+#include <sstream>
 
 #include "pipelines/metrics.hpp"
 #include "pipelines/pipeline.hpp"
@@ -130,7 +132,7 @@ int run_bench(BenchOptions o) {
   std::ofstream csv(o.csv);
   if (!csv) throw std::runtime_error("cannot write " + o.csv);
   csv << "pipeline,scene,terms,width,height,key,value,bake_ms,frame_ms_median,frames,rel_rmse,"
-         "reference_noise\n";
+         "reference_noise,stage_ms_median\n";
   for (double v : sweep.values) {
     RenderRequest request{terms, base, nullptr};
     request.settings[sweep.key] = v;
@@ -138,18 +140,33 @@ int run_bench(BenchOptions o) {
     pipeline->bake(scene, request);
     double bake_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     std::vector<double> times;
+    std::map<std::string, std::vector<double>> stages;  // first-seen order kept in `order`
+    std::vector<std::string> order;
     RenderResult last;
     for (int f = 0; f < o.frames; ++f) {
       auto s = std::chrono::steady_clock::now();
       last = pipeline->render(scene, request);
       times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - s).count());
+      for (const auto& st : last.timings) {
+        if (!stages.count(st.stage)) order.push_back(st.stage);
+        stages[st.stage].push_back(st.ms);
+      }
+    }
+    std::string stage_ms;  // "stage:median;..." (a stage's median over the frames that ran it)
+    for (const auto& name : order) {
+      auto& ms = stages[name];
+      std::sort(ms.begin(), ms.end());
+      std::ostringstream item;
+      item << name << ":" << ms[ms.size() / 2];
+      stage_ms += (stage_ms.empty() ? "" : ";") + item.str();
     }
     std::sort(times.begin(), times.end());
     double median = times[times.size() / 2];
     double err = relative_rmse(last.image, ref.image, mask);
     csv << o.pipeline << "," << std::filesystem::path(o.scene).stem().string() << "," << o.terms
         << "," << scene.width << "," << scene.height << "," << sweep.key << "," << v << ","
-        << bake_ms << "," << median << "," << o.frames << "," << err << "," << ref.noise << "\n";
+        << bake_ms << "," << median << "," << o.frames << "," << err << "," << ref.noise << ","
+        << stage_ms << "\n";
     std::cout << o.pipeline << " " << sweep.key << "=" << v << ": frame " << median
               << " ms (median of " << o.frames << "), relative RMSE " << err
               << " (reference noise " << ref.noise << ")" << std::endl;

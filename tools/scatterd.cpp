@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   add(&scatter::tools::add_bench_command);
   add(&scatter::tools::add_serve_command);
   add(&scatter::tools::add_bake_command);
+  add(&scatter::tools::add_beam_command);
 
   try {
     app.parse(argc, argv);

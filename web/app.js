@@ -36,13 +36,16 @@ const QUALITY = {
   single: { draft: { samples: 5000, directions: 64 }, normal: {}, high: { samples: 100000, directions: 256 } },
   reference: { draft: { step: 0.5 }, normal: {}, high: { step: 0.125 } },
   thickness: { draft: { steps: 12, shadow_size: 512 }, normal: {}, high: { steps: 96, shadow_size: 2048 } },
+  psf: { draft: { step: 1 }, normal: {}, high: { step: 0.25 } },
 };
+// The terms a live view asks of each pipeline: all it renders where it renders several orders.
+const TERMS = { surface: 'surface', psf: 'all' };
 const settingsFor = (pipeline) => (QUALITY[pipeline] || {})[$('quality').value] || {};
 
 function hello() {
   const pipeline = $('pipeline').value;
   send({ type: 'hello', scene_name: $('scene').value, pipeline, format: 'jpg',
-         terms: pipeline === 'surface' ? 'surface' : 'single', settings: settingsFor(pipeline) });
+         terms: TERMS[pipeline] || 'single', settings: settingsFor(pipeline) });
 }
 
 // REST calls carry the page's token, if it was opened with ?token=.

@@ -45,6 +45,7 @@ PsfSettings PsfSettings::read(const Settings& settings) {
   s.shift = r.number("shift", s.shift, 0, 100);
   s.atten = r.integer("atten", s.atten, 0, 2);
   s.thin = r.number("thin", s.thin, 0, 10);
+  s.rebuild = r.integer("rebuild", 0, 0, 1) == 1;
   r.finish();
   return s;
 }
@@ -118,6 +119,7 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
   RenderResult result;
   PsfSettings s = PsfSettings::read(request.settings);
   StageClock clock(result.timings);
+  if (s.rebuild) medium_.lights.clear();
   result.plan = plan(scene, request);  // voxelizes and uploads when the medium changed
   clock.stop("voxelize");
   gpu::ClContext& cl = gpu_.cl();

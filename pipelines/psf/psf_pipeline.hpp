@@ -7,9 +7,11 @@
 // light rebuilds its own only. Refraction and Fresnel are neglected (straight rays).
 //
 // Settings: step (sub-step in voxels, 0.5), spacing (lookups per projected blur width, 1),
-// shift (the width formula's shift in scattering events, the paper's 8), atten (0 the paper's
-// weight exp(-(c/b) l) over the whole path, 1 the view segment only; 2 absorption only: see
-// kernels/psf/march.cl), thin (optical thickness below which the multiple term is skipped, 0.05).
+// shift (the width formula's shift in scattering events, the paper's 8), atten (0 Algorithm 2's
+// weight exp(-(c/b) l) over the whole path, 1 extinction over the view segment only, 2 (default)
+// absorption only over the view segment, as equation 11's action: see kernels/psf/march.cl and
+// docs/BENCHMARKS.md for the measurements behind the default), thin (optical thickness below which the multiple term is skipped, 0.05),
+// rebuild (1: drop the kept light volumes first, as if every light had moved; for benchmarks).
 #pragma once
 
 #include <map>
@@ -26,8 +28,9 @@ struct PsfSettings {
   double step = 0.5;
   double spacing = 1;
   double shift = 8;
-  int atten = 0;
+  int atten = 2;
   double thin = 0.05;
+  bool rebuild = false;
   static PsfSettings read(const Settings& settings);
 };
 

@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# Figures for the psf pipeline in docs/BENCHMARKS.md (about 40 minutes on 2 CPU cores):
+#  - error of the multiple term (and of all terms) against the reference path tracer on sphere
+#    (g 0 and 0.9, and albedo 0.5), layers and bunny, over the attenuation choice and the width
+#    formula's shift, 128 x 128;
+#  - the beam-spread width against Monte Carlo for two scattering coefficients (figure 4);
+#  - precompute (light volume + pyramid) time at 64^3 and 128^3;
+#  - frame time at 512 x 512 with 1 and 4 lights: camera-only change (volumes kept) and light
+#    change (rebuild=1: every light's volume and pyramid rebuilt each frame).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=bench/out
+S=${SCATTERD:-build/scatterd}  # a copy keeps a long run safe from rebuilds
+mkdir -p "$out"
+python3 - "$out" <<'PY'
+import json, sys, math
+out = sys.argv[1]
+base = json.load(open("scenes/sphere.json"))
+s = json.loads(json.dumps(base)); s["medium"]["g"] = 0.9
+json.dump(s, open(f"{out}/sphere-g09.json", "w"))
+s = json.loads(json.dumps(base)); s["medium"]["sigma_a"] = s["medium"]["sigma_s"]
+json.dump(s, open(f"{out}/sphere-albedo05.json", "w"))
+for v in (64, 128):
+    s = json.loads(json.dumps(base)); s["voxels"] = v
+    json.dump(s, open(f"{out}/sphere-v{v}.json", "w"))
+s = json.loads(json.dumps(base))
+light = s["lights"][0]
+s["lights"] = [dict(light, position=[3 * math.cos(a), 2.0, 3 * math.sin(a)], intensity=light["intensity"] / 4)
+               for a in (2 * math.pi * k / 4 for k in range(4))]
+json.dump(s, open(f"{out}/sphere-4lights.json", "w"))
+PY
+small=(--width 128 --height 128 --frames 1)
+for scene in scenes/sphere.json "$out/sphere-g09.json" "$out/sphere-albedo05.json" scenes/layers.json scenes/bunny.json; do
+  name=$(basename "$scene" .json)
+  spp=4096
+  [ "$name" = sphere-g09 ] && spp=16384
+  $S bench "$scene" --pipeline psf --terms multiple "${small[@]}" --reference-spp $spp \
+    --sweep atten=0,1,2 --csv "$out/psf-$name-atten.csv"
+  $S bench "$scene" --pipeline psf --terms multiple "${small[@]}" --reference-spp $spp \
+    --sweep shift=0,2,8 --csv "$out/psf-$name-shift.csv"
+  $S bench "$scene" --pipeline psf --terms all "${small[@]}" --reference-spp $spp \
+    --sweep atten=0,2 --csv "$out/psf-$name-all.csv"
+done
+$S beam --b 0.05 --a 0.0003 --g 0.9 --length 400 --photons 2000000 > "$out/psf-beam-b005.csv"
+$S beam --b 0.2 --a 0.0003 --g 0.9 --length 100 --photons 2000000 > "$out/psf-beam-b02.csv"
+for v in 64 128; do
+  $S bench "$out/sphere-v$v.json" --pipeline psf --terms all --sweep rebuild=1 --frames 5 \
+    --width 64 --height 64 --csv "$out/psf-precompute-v$v.csv"
+done
+for scene in scenes/sphere.json "$out/sphere-4lights.json"; do
+  name=$(basename "$scene" .json)
+  $S bench "$scene" --pipeline psf --terms all --sweep rebuild=0,1 --frames 5 --csv "$out/psf-512-$name.csv"
+done
+$S bench scenes/sphere.json --pipeline reference --terms single --sweep step=0.5 --frames 1 \
+  --csv "$out/psf-512-marcher.csv"
+echo "done: $out/psf-*.csv"
