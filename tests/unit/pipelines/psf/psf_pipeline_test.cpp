@@ -124,6 +124,34 @@ TEST(PsfPipeline, KeepsLightVolumesAcrossCameraMovesAndRebuildsOnlyMovedLights) 
   for (size_t i = 0; i < again.rgb.size(); ++i) ASSERT_FLOAT_EQ(again.rgb[i], third.image.rgb[i]);
 }
 
+TEST(PsfPipeline, SpotLightsLightOnlyInsideTheirCone) {
+  Scene s = small_sphere();
+  Light spot;
+  spot.type = Light::Type::Spot;
+  spot.position = {0, 0, 3};
+  spot.intensity = 20;
+  spot.inner_deg = 10;
+  spot.outer_deg = 15;
+  auto total = [&](Vec3 direction) {
+    s.lights = {spot};
+    s.lights[0].direction = direction;
+    PsfPipeline p(test::shared_gpu());
+    double sum = 0;
+    for (float v : p.render(s, {Terms::All, {}}).image.rgb) sum += v;
+    return sum;
+  };
+  double at = total({0, 0, -1}), away = total({0, 0, 1});
+  EXPECT_GT(at, 0);
+  EXPECT_EQ(away, 0);  // the cone misses the sphere: no light reaches any voxel
+  // A point light of the same intensity at the same place lights at least as much.
+  s.lights = {spot};
+  s.lights[0].type = Light::Type::Point;
+  PsfPipeline p(test::shared_gpu());
+  double point = 0;
+  for (float v : p.render(s, {Terms::All, {}}).image.rgb) point += v;
+  EXPECT_GT(point, at);
+}
+
 TEST(PsfPipeline, SkipsTheMultipleTermInAnOpticallyThinMedium) {
   Scene s = small_sphere();
   s.medium.sigma_s = {0.005, 0.005, 0.005};
