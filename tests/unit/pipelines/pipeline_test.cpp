@@ -11,12 +11,12 @@ namespace {
 TEST(PipelineFactory, MakesEveryKnownPipelineAndRejectsUnknownNames) {
   for (const auto& name : pipeline_names())
     EXPECT_EQ(make_pipeline(name, test::shared_gpu())->name(), name);
-  EXPECT_EQ(pipeline_names(), (std::vector<std::string>{"auto", "surface", "reference", "thickness", "single"}));
+  EXPECT_EQ(pipeline_names(), (std::vector<std::string>{"auto", "surface", "reference", "thickness", "single", "psf", "lbl"}));
   try {
     make_pipeline("magic", test::shared_gpu());
     FAIL();
   } catch (const ValidationError& e) {
-    EXPECT_EQ(std::string(e.what()), "pipeline: unknown pipeline \"magic\" (known: auto, surface, reference, thickness, single)");
+    EXPECT_EQ(std::string(e.what()), "pipeline: unknown pipeline \"magic\" (known: auto, surface, reference, thickness, single, psf, lbl)");
   }
   EXPECT_EQ(parse_terms("multiple"), Terms::Multiple);
   EXPECT_THROW(parse_terms("everything"), ValidationError);
