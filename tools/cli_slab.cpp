@@ -1,9 +1,11 @@
-// scatterd slab --tau T|inf --albedo A --g G --mu0 M --ior N --solver reference [--photons K]
+// scatterd slab --tau T|inf --albedo A --g G --mu0 M --ior N --solver reference|lbl [--photons K]
 //               [--seed S] [--json]
+// lbl: the lbl pipeline's lattice at steady state (finite tau, ior 1; photons and seed unused).
 #include <cmath>
 #include <iostream>
 
 #include "gpu/gpu.hpp"
+#include "pipelines/lbl/slab.hpp"
 #include "pipelines/reference/slab.hpp"
 #include "protocol/json_reader.hpp"
 #include "tools/commands.hpp"
@@ -32,11 +34,14 @@ int run_slab(SlabOptions o) {
     if (used == 0 || used != o.tau.size())
       throw ValidationError("--tau", "expects a number or inf, got \"" + o.tau + "\"");
   }
-  if (o.solver != "reference")
-    throw ValidationError("--solver", "unknown solver \"" + o.solver + "\" (known: reference)");
+  if (o.solver != "reference" && o.solver != "lbl")
+    throw ValidationError("--solver", "unknown solver \"" + o.solver + "\" (known: reference, lbl)");
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
-  SlabResult r = run_reference_slab(gpu.cl(), o.params);
-  nlohmann::json j = r;
+  nlohmann::json j;
+  if (o.solver == "lbl")
+    j = lbl::run_lbl_slab(gpu.cl(), o.params);
+  else
+    j = run_reference_slab(gpu.cl(), o.params);
   if (o.json) {
     std::cout << j.dump() << "\n";
   } else {
@@ -58,7 +63,7 @@ Handler add_slab_command(CLI::App& app) {
   cmd->add_option("--ior", o->params.ior, "Refractive index of the slab (outside: 1)")->capture_default_str();
   cmd->add_option("--photons", o->params.photons, "Photons to trace")->capture_default_str();
   cmd->add_option("--seed", o->params.seed, "Random seed")->capture_default_str();
-  cmd->add_option("--solver", o->solver, "reference")->capture_default_str();
+  cmd->add_option("--solver", o->solver, "reference (transport, Monte Carlo) or lbl (the lattice)")->capture_default_str();
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");
   cmd->add_flag("--json", o->json, "Print one JSON object");
   return [o] { return run_slab(*o); };

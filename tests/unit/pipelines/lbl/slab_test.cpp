@@ -1,0 +1,63 @@
+#include "pipelines/lbl/slab.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "../../test_util.hpp"
+#include "protocol/json_reader.hpp"
+
+namespace scatter::lbl {
+namespace {
+
+LblSlabResult slab(double tau, double albedo, double g = 0, double mu0 = 1) {
+  SlabParams p;
+  p.tau = tau;
+  p.albedo = albedo;
+  p.g = g;
+  p.mu0 = mu0;
+  return run_lbl_slab(test::shared_gpu().cl(), p);
+}
+
+// Without absorption everything that enters leaves through one face or the other.
+TEST(LblSlab, ConservativeSlabReflectsOrTransmitsEverything) {
+  for (double tau : {1.0, 8.0}) {
+    for (double g : {0.0, 0.75}) {
+      LblSlabResult r = slab(tau, 1.0, g, 0.8);
+      EXPECT_TRUE(r.converged);
+      EXPECT_NEAR(r.R + r.T, 1.0, 1e-3) << "tau " << tau << " g " << g;
+      EXPECT_NEAR(r.T_direct, std::exp(-tau / 0.8), 1e-12);
+    }
+  }
+}
+
+TEST(LblSlab, AbsorbingSlabWithoutScatteringOnlyTransmitsTheBeam) {
+  LblSlabResult r = slab(2, 0);
+  EXPECT_EQ(r.R, 0);
+  EXPECT_EQ(r.T_diffuse, 0);
+  EXPECT_NEAR(r.absorbed, 1 - std::exp(-2.0), 1e-12);
+}
+
+// More scattering reflects more; a thicker slab transmits less; forward scattering reflects less.
+TEST(LblSlab, TrendsFollowTransport) {
+  LblSlabResult low = slab(4, 0.5), high = slab(4, 0.99);
+  EXPECT_LT(low.R, high.R);
+  EXPECT_GT(slab(2, 0.9).T, slab(8, 0.9).T);
+  EXPECT_LT(slab(4, 0.9, 0.75).R, slab(4, 0.9, 0.0).R);
+  EXPECT_GT(high.absorbed, 0);
+}
+
+TEST(LblSlab, RejectsWhatTheLatticeDoesNotModel) {
+  SlabParams p;
+  p.tau = INFINITY;
+  EXPECT_THROW(run_lbl_slab(test::shared_gpu().cl(), p), ValidationError);
+  p.tau = 1;
+  p.ior = 1.33;
+  EXPECT_THROW(run_lbl_slab(test::shared_gpu().cl(), p), ValidationError);
+  p.ior = 1;
+  p.albedo = 1.5;
+  EXPECT_THROW(run_lbl_slab(test::shared_gpu().cl(), p), ValidationError);
+}
+
+}  // namespace
+}  // namespace scatter::lbl
