@@ -175,3 +175,10 @@ __kernel void partial_sums(__global const float* data, ulong count, __global flo
   for (size_t k = i; k < count; k += items) s += data[k];
   partial[i] = s;
 }
+
+// A STREAM-like copy (out[i] = in[i], a float4 per work item) for comparing the lattice step's
+// memory traffic with what the device sustains.
+__kernel void stream_copy(__global const float4* in, __global float4* out) {
+  size_t i = get_global_id(0);
+  out[i] = in[i];
+}

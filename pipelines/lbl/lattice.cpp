@@ -1,6 +1,7 @@
 #include "pipelines/lbl/lattice.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -159,6 +160,25 @@ Convergence Lattice::converge(double tolerance, int max_steps, int check_every) 
     energy_before = energy_now;
   }
   return c;
+}
+
+double Lattice::time_steps(int steps) {
+  cl_.queue().finish();
+  auto t0 = std::chrono::steady_clock::now();
+  int done = step(steps);
+  cl_.queue().finish();
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / done;
+}
+
+double Lattice::time_copy(int copies) {
+  cl::Kernel k(cl_.program({"kernels/lbl/lattice.cl"}), "stream_copy");
+  // Copies between the two state buffers: the spare one is overwritten by the next step anyway.
+  gpu::set_args(k, f_[cur_], f_[1 - cur_]);
+  cl_.queue().finish();
+  auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < copies; ++i) cl_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(18 * n_ / 4));
+  cl_.queue().finish();
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / copies;
 }
 
 }  // namespace scatter::lbl

@@ -54,6 +54,13 @@ class Lattice {
   // irradiance and of the total energy are both under `tolerance`, or `max_steps` are done.
   Convergence converge(double tolerance, int max_steps, int check_every);
 
+  // Milliseconds per lattice step over `steps` more steps, and per STREAM-like copy of the state
+  // (18 floats per node) over `copies` copies; the bytes each moves through memory.
+  double time_steps(int steps);
+  double time_copy(int copies);
+  double step_bytes() const { return double(n_) * 51 * sizeof(float); }  // f in/out 36, coefficients 12, irr 3
+  double copy_bytes() const { return double(n_) * 36 * sizeof(float); }
+
  private:
   gpu::ClContext& cl_;
   LatticeOptions o_;

@@ -75,6 +75,7 @@ LblSettings LblSettings::read(const Settings& settings) {
   s.check_every = r.integer("check_every", s.check_every, 1, 1024);
   s.warm = r.integer("warm", 1, 0, 1) == 1;
   s.skip_multiple = r.number("skip_multiple", s.skip_multiple, 0, 1);
+  s.measure = r.integer("measure", 0, 0, 1) == 1;
   r.finish();
   return s;
 }
@@ -163,6 +164,9 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
                                     " rays per voxel width, " + path + "; deposits added by CAS atomics"
                               : "lights and material unchanged: deposit kept"});
   p.stages.push_back(diffuse_stage(d, s));
+  if (s.measure)
+    p.stages.push_back({"bandwidth", d.diffuse, d.diffuse ? "16 more lattice steps and 16 copies of its state, timed"
+                                                          : "nothing diffused in this frame"});
   std::string gathers = d.single && d.multiple ? "deposit + lattice" : (d.single ? "the deposit" : "the lattice");
   std::string phase = scene.medium.g != 0 ? "; phase taken isotropic (g " + fmt(scene.medium.g) +
                                                 " enters the lattice as sigma_s (1 - g))"
@@ -242,6 +246,15 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
                                     : "; stopped at the step bound after " + std::to_string(c.steps) +
                                           " steps (change " + fmt(c.change) + ")";
     clock.stop("diffuse");
+    if (s.measure) {
+      double step_ms = st.lattice->time_steps(16), copy_ms = st.lattice->time_copy(16);
+      for (auto& stage : result.plan.stages)
+        if (stage.name == "bandwidth")
+          stage.reason = "lattice step " + fmt(step_ms) + " ms = " + fmt(st.lattice->step_bytes() / step_ms / 1e6) +
+                         " GB/s; STREAM-like copy " + fmt(copy_ms) + " ms = " +
+                         fmt(st.lattice->copy_bytes() / copy_ms / 1e6) + " GB/s";
+      clock.stop("bandwidth");
+    }
   }
   const int w = scene.width, h = scene.height;
   const size_t floats = size_t(w) * h * 3;

@@ -19,7 +19,9 @@
 // on the CPU device, see docs/BENCHMARKS.md); block (4) b; inner (1) steps per block launch;
 // tolerance (1e-3) relative change that ends the diffusion; max_steps (20000); check_every (16);
 // warm (1) warm start; skip_multiple (1e-3) skip the lattice when a scattered photon's chance to
-// scatter again, 1 - exp(-max sigma_s x longest side), is under this.
+// scatter again, 1 - exp(-max sigma_s x longest side), is under this; measure (0) after a
+// diffusion, time 16 more lattice steps and 16 STREAM-like copies of the lattice state (stage
+// "bandwidth": the achieved GB/s of each).
 #pragma once
 
 #include <memory>
@@ -47,6 +49,7 @@ struct LblSettings {
   int check_every = 16;
   bool warm = true;
   double skip_multiple = 1e-3;
+  bool measure = false;
   static LblSettings read(const Settings& settings);
 };
 
