@@ -31,33 +31,46 @@ void splat(const Grid* g, float3 p, int ch, float amount, __global float* deposi
 }
 
 // Beer-Lambert over a piece of length ds in voxel c; the scattered power is splatted at `mid`.
+// With g != 0 a second, delta-Eddington scaled beam feeds the lattice: the forward fraction g of
+// its scattering stays in the beam (sigma_s' = (1 - g) sigma_s), as the lattice's own
+// coefficients are scaled, and what it scatters goes to `source`; `deposit` keeps the real
+// single scattering for the view pass.
 void deposit_piece(const Grid* g, __global const float* sigma_s, __global const float* sigma_t,
-                   int3 c, float3 mid, float ds, float3* power, __global float* deposit) {
+                   float g_phase, int3 c, float3 mid, float ds, float3* power, float3* scaled,
+                   __global float* deposit, __global float* source) {
   int v = 3 * voxel_index(g, c.x, c.y, c.z);
-  float p[3] = {power->x, power->y, power->z};
+  float p[3] = {power->x, power->y, power->z}, q[3] = {scaled->x, scaled->y, scaled->z};
   for (int ch = 0; ch < 3; ++ch) {
-    float st = sigma_t[v + ch];
+    float st = sigma_t[v + ch], ss = sigma_s[v + ch];
     if (st <= 0.0f) continue;
     float keep = exp(-st * ds);
-    float scattered = p[ch] * (sigma_s[v + ch] / st) * (1.0f - keep);
+    float scattered = p[ch] * (ss / st) * (1.0f - keep);
     if (scattered > 0.0f) splat(g, mid, ch, scattered, deposit);
     p[ch] *= keep;
+    if (g_phase == 0.0f) continue;
+    float sr = (1.0f - g_phase) * ss, tr = st - g_phase * ss;
+    float keep_r = exp(-tr * ds);
+    float scattered_r = tr > 0.0f ? q[ch] * (sr / tr) * (1.0f - keep_r) : 0.0f;
+    if (scattered_r > 0.0f) splat(g, mid, ch, scattered_r, source);
+    q[ch] *= keep_r;
   }
   *power = (float3)(p[0], p[1], p[2]);
+  *scaled = g_phase == 0.0f ? *power : (float3)(q[0], q[1], q[2]);
 }
 
 __kernel void march_rays(float3 origin, float voxel, int nx, int ny, int nz,
                          __global const float* sigma_s, __global const float* sigma_t,
                          __global const float* n_field, __global const float* grad_field,
                          __global const float* rays, int ray_count, int bend, float delta,
-                         float cutoff, __global float* deposit) {
+                         float cutoff, float g_phase, __global float* deposit,
+                         __global float* source) {
   int r = get_global_id(0);
   if (r >= ray_count) return;
   Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
   __global const float* ray = rays + RAY_FLOATS * r;
   float3 o = (float3)(ray[0], ray[1], ray[2]);
   float3 d = (float3)(ray[3], ray[4], ray[5]);
-  float3 power = (float3)(ray[6], ray[7], ray[8]);
+  float3 power = (float3)(ray[6], ray[7], ray[8]), scaled = power;
   float start = fmax(power.x, fmax(power.y, power.z)), stop = cutoff * start;
   float t0, t1;
   if (start <= 0.0f || !grid_interval(&g, o, d, &t0, &t1)) return;
@@ -66,8 +79,9 @@ __kernel void march_rays(float3 origin, float voxel, int nx, int ny, int nz,
     dda_init(&s, o, d, g.origin, g.voxel, (int3)(nx, ny, nz), t0, t1);
     float a, b;
     int3 c;
-    while (dda_next(&s, &a, &b, &c) && fmax(power.x, fmax(power.y, power.z)) > stop)
-      deposit_piece(&g, sigma_s, sigma_t, c, o + d * (0.5f * (a + b)), b - a, &power, deposit);
+    while (dda_next(&s, &a, &b, &c) && fmax(scaled.x, fmax(scaled.y, scaled.z)) > stop)
+      deposit_piece(&g, sigma_s, sigma_t, g_phase, c, o + d * (0.5f * (a + b)), b - a, &power,
+                    &scaled, deposit, source);
     return;
   }
   float3 x = o + d * t0;
@@ -75,12 +89,13 @@ __kernel void march_rays(float3 origin, float voxel, int nx, int ny, int nz,
   trilinear(&g, n_field, 1, x, &n);
   float3 v = n * d;
   int max_steps = (int)(4.0f * (nx + ny + nz) * voxel / delta) + 8;
-  for (int i = 0; i < max_steps && fmax(power.x, fmax(power.y, power.z)) > stop; ++i) {
+  for (int i = 0; i < max_steps && fmax(scaled.x, fmax(scaled.y, scaled.z)) > stop; ++i) {
     float3 x0 = x;
     float ds = eikonal_step(&g, n_field, grad_field, delta, &x, &v);
     int3 c = voxel_of(&g, 0.5f * (x0 + x));
     if (!inside_grid(&g, c)) break;
-    deposit_piece(&g, sigma_s, sigma_t, c, 0.5f * (x0 + x), ds, &power, deposit);
+    deposit_piece(&g, sigma_s, sigma_t, g_phase, c, 0.5f * (x0 + x), ds, &power, &scaled, deposit,
+                  source);
   }
 }
 

@@ -88,7 +88,8 @@ struct State {
   Volume volume;
   ClVolume device;
   std::unique_ptr<Lattice> lattice;
-  cl::Buffer deposit;
+  cl::Buffer deposit;  // single scattering of the light rays (the single term)
+  cl::Buffer source;   // the lattice's source: the deposit, or with g != 0 the scaled beam's
   double max_sigma_s = 0;
   bool diffused = false;  // the lattice has converged for the loaded deposit and settings
 };
@@ -169,7 +170,7 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
                                                           : "nothing diffused in this frame"});
   std::string gathers = d.single && d.multiple ? "deposit + lattice" : (d.single ? "the deposit" : "the lattice");
   std::string phase = scene.medium.g != 0 ? "; phase taken isotropic (g " + fmt(scene.medium.g) +
-                                                " enters the lattice as sigma_s (1 - g))"
+                                                " enters the lattice and its source delta-Eddington scaled)"
                                           : "";
   p.stages.push_back({"view", true, std::string(d.bend ? "eye rays refracted by grad n" : "straight eye rays (DDA)") +
                                         ", gathering " + gathers + phase});
@@ -207,6 +208,9 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     lbl::LatticeOptions o{.blocked = s.blocked, .block = s.block, .inner = s.inner};
     next->lattice = std::make_unique<lbl::Lattice>(cl, lbl::lattice_coefficients(next->volume, scene.medium.g), o);
     next->deposit = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));
+    next->source = scene.medium.g == 0
+                       ? next->deposit
+                       : cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));
     next->material = material_key(scene, s);
     next->density = scene.medium.density;
     state_ = std::move(next);
@@ -225,8 +229,10 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   if (d.march) {
     lbl::RaySet rays = lbl::light_rays(scene.lights, st.volume, s.rays, 4096);
     cl::Buffer ray_buf = upload(cl, rays.rays);
-    queue.enqueueFillBuffer(st.deposit, 0.f, 0, 3 * st.volume.count() * sizeof(float));
-    lbl::march(cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff, st.deposit);
+    for (cl::Buffer* b : {&st.deposit, &st.source})
+      queue.enqueueFillBuffer(*b, 0.f, 0, 3 * st.volume.count() * sizeof(float));
+    lbl::march(cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff,
+               scene.medium.g, st.deposit, st.source);
     queue.finish();
     st.lights = light_key(scene, s);
     st.diffused = false;
@@ -234,7 +240,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   }
   if (d.diffuse) {
     if (!s.warm) st.lattice->clear();
-    st.lattice->set_source(st.deposit);
+    st.lattice->set_source(st.source);
     lbl::Convergence c = st.lattice->converge(s.tolerance, s.max_steps, s.check_every);
     queue.finish();
     st.diffused = true;

@@ -29,9 +29,11 @@ RaySet light_rays(const std::vector<Light>& lights, const Volume& v, double per_
 
 // Adds the power each ray scatters in each voxel to `deposit` (3 floats per voxel). `bend`:
 // follow the ray equation in steps of `step` scene units; otherwise cross voxels exactly.
-// Rays stop when their strongest channel falls under `cutoff` times its start.
+// Rays stop when their strongest channel falls under `cutoff` times its start. With g != 0 the
+// delta-Eddington scaled beam's scattering (the lattice's source) goes to `source` (which may
+// then not be `deposit`); with g = 0 the two are the same and `source` is not written.
 void march(gpu::ClContext& cl, const ClVolume& v, const cl::Buffer& rays, int count, bool bend,
-           double step, double cutoff, cl::Buffer& deposit);
+           double step, double cutoff, double g, cl::Buffer& deposit, cl::Buffer& source);
 
 // Positions after each of `steps` Eikonal steps of `step` scene units from each ray's origin
 // (3 floats per step per ray), for tests of the integrator.

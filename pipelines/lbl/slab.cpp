@@ -49,12 +49,16 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   v.sigma_t.assign(3 * v.count(), static_cast<float>(dtau));
   LatticeOptions lo{.blocked = false, .edges = {Edge::Periodic, Edge::Periodic, Edge::Open}};
   Lattice lattice(cl, lattice_coefficients(v, p.g), lo);
-  // The beam (power 1 per node's cross-section, travelling +z) scatters in layer k what enters
-  // it times albedo x (1 - exp(-dtau / mu0)).
+  // The beam (power 1 per node's cross-section, travelling +z), delta-Eddington scaled like the
+  // lattice: the forward fraction g of its scattering stays in the beam, so it attenuates with
+  // sigma_t' = (1 - a g) sigma_t and scatters in layer k what enters it times
+  // a' (1 - exp(-dtau' / mu0)), a' = a (1 - g) / (1 - a g).
+  const double dtau_r = (1 - p.albedo * p.g) * dtau;
+  const double albedo_r = dtau_r > 0 ? p.albedo * (1 - p.g) * dtau / dtau_r : 0;
   std::vector<float> source(3 * v.count());
   for (int k = 0; k < r.layers; ++k) {
-    double in = std::exp(-k * dtau / p.mu0);
-    double s = in * p.albedo * -std::expm1(-dtau / p.mu0);
+    double in = std::exp(-k * dtau_r / p.mu0);
+    double s = in * albedo_r * -std::expm1(-dtau_r / p.mu0);
     for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(s);
   }
   lattice.set_source(source);
@@ -66,8 +70,9 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   const size_t n = lattice.nodes();
   const int up = 4, down = 5;  // +z, -z
   r.R_diffuse = f[(down * 3) * n + 0];
-  r.T_diffuse = f[(up * 3) * n + (n - 1)];
   r.T_direct = std::exp(-p.tau / p.mu0);
+  // What the scaled beam carries out beyond the unscattered part was scattered forward.
+  r.T_diffuse = f[(up * 3) * n + (n - 1)] + std::exp(-r.layers * dtau_r / p.mu0) - r.T_direct;
   r.R = r.R_diffuse + r.R_specular;
   r.T = r.T_diffuse + r.T_direct;
   r.absorbed = 1 - r.R - r.T;

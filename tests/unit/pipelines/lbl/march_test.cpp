@@ -48,7 +48,9 @@ double chord(const float* ray) {
 
 // The march's deposit summed over the grid equals, ray by ray, P (sigma_s / sigma_t) (1 -
 // exp(-sigma_t L)) for the ray's chord L through the box (computed here on the CPU).
-void check_total_deposit(const Light& light) {
+// With g != 0 the lattice's source is the same for the scaled coefficients (1 - g) sigma_s and
+// sigma_t - g sigma_s.
+void check_total_deposit(const Light& light, double g = 0) {
   const float ss = 2.f, sa = 0.5f;
   Volume v = box_volume(ss, sa);
   ClVolume dv = upload_volume(cl(), v);
@@ -57,17 +59,32 @@ void check_total_deposit(const Light& light) {
   cl::Buffer ray_buf = upload(cl(), rays.rays);
   cl::Buffer deposit(cl().context(), CL_MEM_READ_WRITE, 3 * v.count() * sizeof(float));
   cl().queue().enqueueFillBuffer(deposit, 0.f, 0, 3 * v.count() * sizeof(float));
-  march(cl(), dv, ray_buf, rays.count(), false, 0.05, 0, deposit);
-  std::vector<float> got(3 * v.count());
-  cl().queue().enqueueReadBuffer(deposit, CL_TRUE, 0, got.size() * sizeof(float), got.data());
-  double expected = 0, total = 0;
-  for (int r = 0; r < rays.count(); ++r) {
-    const float* ray = &rays.rays[size_t(kRayFloats) * r];
-    expected += ray[6] * (ss / (ss + sa)) * -std::expm1(-(ss + sa) * chord(ray));
-  }
-  for (size_t i = 0; i < got.size(); i += 3) total += got[i];
+  cl::Buffer source(cl().context(), CL_MEM_READ_WRITE, 3 * v.count() * sizeof(float));
+  for (cl::Buffer* b : {&deposit, &source})
+    cl().queue().enqueueFillBuffer(*b, 0.f, 0, 3 * v.count() * sizeof(float));
+  march(cl(), dv, ray_buf, rays.count(), false, 0.05, 0, g, deposit, source);
+  auto total_of = [&](cl::Buffer& b) {
+    std::vector<float> got(3 * v.count());
+    cl().queue().enqueueReadBuffer(b, CL_TRUE, 0, got.size() * sizeof(float), got.data());
+    double total = 0;
+    for (size_t i = 0; i < got.size(); i += 3) total += got[i];
+    return total;
+  };
+  auto expected_for = [&](double s, double t) {
+    double e = 0;
+    for (int r = 0; r < rays.count(); ++r) {
+      const float* ray = &rays.rays[size_t(kRayFloats) * r];
+      e += ray[6] * (s / t) * -std::expm1(-t * chord(ray));
+    }
+    return e;
+  };
+  double expected = expected_for(ss, ss + sa);
   EXPECT_GT(expected, 0);
-  EXPECT_NEAR(total, expected, 1e-4 * expected);
+  EXPECT_NEAR(total_of(deposit), expected, 1e-4 * expected);
+  if (g == 0) return;
+  double scaled = expected_for((1 - g) * ss, ss + sa - g * ss);
+  EXPECT_LT(scaled, expected);
+  EXPECT_NEAR(total_of(source), scaled, 1e-4 * scaled);
 }
 
 TEST(LblMarch, DirectionalDepositMatchesBeerLambertPerRay) {
@@ -84,6 +101,7 @@ TEST(LblMarch, PointDepositMatchesBeerLambertPerRay) {
   l.position = {1.5, 2, 2.5};
   l.intensity = 5;
   check_total_deposit(l);
+  check_total_deposit(l, 0.6);
 }
 
 // Rays carry the light's power: a directional light's rays carry E times the disc they cover,
