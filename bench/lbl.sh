@@ -3,8 +3,9 @@
 #  slab     R and T of the lattice against the reference's transport (tau 1-16, albedo 0.5-0.999,
 #           g 0 and 0.75): bench/out/lbl-slab.csv
 #  images   relative RMSE of the multiple and all terms against the reference path tracer on
-#           sphere, layers and bunny at 128 x 128, 32^3 and 64^3 voxels, global lattice against
-#           blocks of 4^3 (4 steps per launch); block size 2, 4, 8 on the sphere: bench/out/lbl-*.csv
+#           sphere, layers and bunny at 128 x 128, 32^3 and 64^3 voxels, 6 and 18 directions
+#           (global lattice); the paper's blocks (b 2, 4, 8, 4 steps per launch) on the sphere:
+#           bench/out/lbl-*.csv
 #  albedo   lattice steps to convergence against albedo (sigma_t fixed): bench/out/lbl-albedo.csv
 #  bandwidth the lattice step's GB/s against a STREAM-like copy in the same run (64^3, 128^3)
 #  frames   light change against camera-only change at 512 x 512 in a live session
@@ -40,7 +41,7 @@ if has images; then
       sed "s/\"voxels\": [0-9]*/\"voxels\": $v/" scenes/$scene.json > "$out/lbl-$scene-v$v.json"
       for terms in multiple all; do
         $S bench "$out/lbl-$scene-v$v.json" --pipeline lbl --terms $terms --width 128 --height 128 \
-          --frames 1 --reference-spp 1024 --set inner=4 --sweep blocked=0,1 \
+          --frames 1 --reference-spp 1024 --sweep directions=6,18 \
           --csv "$out/lbl-$scene-v$v-$terms.csv"
       done
     done

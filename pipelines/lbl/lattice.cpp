@@ -31,18 +31,30 @@ Lattice::Lattice(gpu::ClContext& cl, const LatticeCoefficients& c, LatticeOption
       if (e == Edge::Periodic) throw std::invalid_argument("the blocked lattice has no periodic edges");
     if (o_.inner < 1) throw std::invalid_argument("lattice inner steps must be at least 1");
   }
+  if (o_.directions != 6 && o_.directions != 18) throw std::invalid_argument("lattice directions must be 6 or 18");
+  if (o_.directions == 18 && o_.blocked) throw std::invalid_argument("the 18-direction lattice has no blocked form");
   pt_ = upload(cl, c.pt);
   ps_ = upload(cl, c.ps);
   w_ = upload(cl, c.w);
+  if (o_.directions == 18) {
+    if (c.pt_diag.size() != c.pt.size() || c.ps_diag.size() != c.pt.size() || c.w_diag.size() != c.pt.size())
+      throw std::invalid_argument("the 18-direction lattice needs the diagonal coefficients");
+    pt_d_ = upload(cl, c.pt_diag);
+    ps_d_ = upload(cl, c.ps_diag);
+    w_d_ = upload(cl, c.w_diag);
+  }
   src_ = device_buffer(cl, 3 * n_);
   irr_ = device_buffer(cl, 3 * n_);
   partial_ = device_buffer(cl, kSumItems);
-  for (auto& f : f_) f = device_buffer(cl, 18 * n_);
+  for (auto& f : f_) f = device_buffer(cl, floats());
   size_t blocks = o_.blocked ? n_ / (size_t(o_.block) * o_.block * o_.block) : 0;
   for (auto& i : iface_) i = device_buffer(cl, blocks * 6 * o_.block * o_.block * 3);
   std::string defines = o_.blocked ? "-DLBL_B=" + std::to_string(o_.block) : "";
   cl::Program& program = cl.program({"kernels/lbl/lattice.cl"}, defines);
-  step_kernel_ = cl::Kernel(program, o_.blocked ? "lattice_blocked" : "lattice_step");
+  if (o_.directions == 18)
+    step_kernel_ = cl::Kernel(cl.program({"kernels/lbl/lattice18.cl"}), "lattice18_step");
+  else
+    step_kernel_ = cl::Kernel(program, o_.blocked ? "lattice_blocked" : "lattice_step");
   sum_kernel_ = cl::Kernel(program, "partial_sums");
   // Probes: nodes that scatter, spread evenly through the grid's order.
   std::vector<size_t> medium;
@@ -54,7 +66,7 @@ Lattice::Lattice(gpu::ClContext& cl, const LatticeCoefficients& c, LatticeOption
 }
 
 void Lattice::clear() {
-  for (auto& f : f_) cl_.queue().enqueueFillBuffer(f, 0.f, 0, 18 * n_ * sizeof(float));
+  for (auto& f : f_) cl_.queue().enqueueFillBuffer(f, 0.f, 0, floats() * sizeof(float));
   for (auto& i : iface_) {
     size_t bytes = i.getInfo<CL_MEM_SIZE>();
     cl_.queue().enqueueFillBuffer(i, 0.f, 0, bytes);
@@ -72,7 +84,7 @@ void Lattice::set_source(const std::vector<float>& deposit) {
 }
 
 void Lattice::set_state(const std::vector<float>& f) {
-  if (f.size() != 18 * n_) throw std::invalid_argument("lattice state must hold 18 floats per node");
+  if (f.size() != floats()) throw std::invalid_argument("lattice state must hold 3 floats per node and direction");
   cl_.queue().enqueueWriteBuffer(f_[cur_], CL_TRUE, 0, f.size() * sizeof(float), f.data());
   if (!o_.blocked) return;
   cl::Kernel k(cl_.program({"kernels/lbl/lattice.cl"}, "-DLBL_B=" + std::to_string(o_.block)),
@@ -84,7 +96,7 @@ void Lattice::set_state(const std::vector<float>& f) {
 }
 
 std::vector<float> Lattice::state() {
-  std::vector<float> f(18 * n_);
+  std::vector<float> f(floats());
   cl_.queue().enqueueReadBuffer(f_[cur_], CL_TRUE, 0, f.size() * sizeof(float), f.data());
   return f;
 }
@@ -100,6 +112,10 @@ int Lattice::step(int steps) {
                     irr_, iface_[cur_], iface_[next], o_.inner);
       cl_.queue().enqueueNDRangeKernel(step_kernel_, cl::NullRange, cl::NDRange(nx_, ny_, nz_),
                                        cl::NDRange(o_.block, o_.block, o_.block));
+    } else if (o_.directions == 18) {
+      gpu::set_args(step_kernel_, nx_, ny_, nz_, ex, ey, ez, pt_, ps_, w_, pt_d_, ps_d_, w_d_, src_,
+                    f_[cur_], f_[next], irr_);
+      cl_.queue().enqueueNDRangeKernel(step_kernel_, cl::NullRange, cl::NDRange(nx_, ny_, nz_));
     } else {
       gpu::set_args(step_kernel_, nx_, ny_, nz_, ex, ey, ez, pt_, ps_, w_, src_, f_[cur_], f_[next], irr_);
       cl_.queue().enqueueNDRangeKernel(step_kernel_, cl::NullRange, cl::NDRange(nx_, ny_, nz_));
@@ -111,7 +127,7 @@ int Lattice::step(int steps) {
 }
 
 double Lattice::energy() {
-  gpu::set_args(sum_kernel_, f_[cur_], cl_ulong(18 * n_), partial_);
+  gpu::set_args(sum_kernel_, f_[cur_], cl_ulong(floats()), partial_);
   cl_.queue().enqueueNDRangeKernel(sum_kernel_, cl::NullRange, cl::NDRange(kSumItems));
   std::vector<float> partial(kSumItems);
   cl_.queue().enqueueReadBuffer(partial_, CL_TRUE, 0, kSumItems * sizeof(float), partial.data());
@@ -176,7 +192,7 @@ double Lattice::time_copy(int copies) {
   gpu::set_args(k, f_[cur_], f_[1 - cur_]);
   cl_.queue().finish();
   auto t0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < copies; ++i) cl_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(18 * n_ / 4));
+  for (int i = 0; i < copies; ++i) cl_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(floats() / 4));
   cl_.queue().finish();
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / copies;
 }

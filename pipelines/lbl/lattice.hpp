@@ -18,6 +18,7 @@ struct LatticeOptions {
   bool blocked = true;  // the paper's blocks; false: one work item per node over the whole grid
   int block = 4;        // b (blocked): the grid's sides must be multiples of it
   int inner = 1;        // steps per launch inside a block (blocked); 1 matches the global form
+  int directions = 6;   // 6 (the paper's) or 18 (Geist et al.'s, global form only)
   std::array<Edge, 3> edges{Edge::Open, Edge::Open, Edge::Open};  // periodic: global form only
 };
 
@@ -29,7 +30,8 @@ struct Convergence {
 
 class Lattice {
  public:
-  // Throws std::invalid_argument for sides that are not whole blocks or a periodic blocked edge.
+  // Throws std::invalid_argument for sides that are not whole blocks, a periodic blocked edge or
+  // a blocked 18-direction lattice.
   Lattice(gpu::ClContext& cl, const LatticeCoefficients& c, LatticeOptions options);
 
   // Zeroes the state (f and interfaces); the source stays.
@@ -37,7 +39,8 @@ class Lattice {
   // The power deposited per node per step (3 floats per node, same layout as the volume).
   void set_source(const cl::Buffer& deposit);
   void set_source(const std::vector<float>& deposit);
-  // f as 18 floats per node: f[(d * 3 + ch) * N + node], d = +x, -x, +y, -y, +z, -z.
+  // f as 3 x directions floats per node: f[(d * 3 + ch) * N + node], d = +x, -x, +y, -y, +z,
+  // -z (then the diagonals of kernels/lbl/lattice18.cl).
   void set_state(const std::vector<float>& f);
   std::vector<float> state();
 
@@ -58,15 +61,17 @@ class Lattice {
   // (18 floats per node) over `copies` copies; the bytes each moves through memory.
   double time_steps(int steps);
   double time_copy(int copies);
-  double step_bytes() const { return double(n_) * 51 * sizeof(float); }  // f in/out 36, coefficients 12, irr 3
-  double copy_bytes() const { return double(n_) * 36 * sizeof(float); }
+  // f in and out, coefficients (3 or 6 arrays of 3) and source, irradiance.
+  double step_bytes() const { return double(n_) * (6 * o_.directions + (o_.directions == 6 ? 12 : 21) + 3) * sizeof(float); }
+  double copy_bytes() const { return double(n_) * 6 * o_.directions * sizeof(float); }
 
  private:
   gpu::ClContext& cl_;
   LatticeOptions o_;
   int nx_, ny_, nz_;
   size_t n_;
-  cl::Buffer pt_, ps_, w_, src_, irr_, partial_;
+  size_t floats() const { return 3 * size_t(o_.directions) * n_; }  // of f
+  cl::Buffer pt_, ps_, w_, pt_d_, ps_d_, w_d_, src_, irr_, partial_;
   cl::Buffer f_[2], iface_[2];
   int cur_ = 0;  // f_[cur_] and iface_[cur_] hold the current state
   cl::Kernel step_kernel_, sum_kernel_;

@@ -26,6 +26,7 @@ std::string material_key(const Scene& scene, const LblSettings& s) {
   for (int c = 0; c < 3; ++c) k.add("sigma_s", scene.medium.sigma_s[c]).add("sigma_a", scene.medium.sigma_a[c]);
   k.add("g", scene.medium.g).add("ior", scene.medium.ior).add("voxels", scene.voxels);
   k.add("smooth", s.smooth).add("blocked", s.blocked).add("block", s.block).add("inner", s.inner);
+  k.add("directions", s.directions);
   return k.hex();
 }
 
@@ -70,6 +71,9 @@ LblSettings LblSettings::read(const Settings& settings) {
   s.blocked = r.integer("blocked", 0, 0, 1) == 1;
   s.block = r.integer("block", s.block, 1, 8);
   s.inner = r.integer("inner", s.inner, 1, 16);
+  s.directions = r.integer("directions", s.directions, 6, 18);
+  if (s.directions != 6 && s.directions != 18)
+    throw ValidationError("settings.directions", "must be 6 or 18, got " + std::to_string(s.directions));
   s.tolerance = r.number("tolerance", s.tolerance, 1e-6, 0.5);
   s.max_steps = r.integer("max_steps", s.max_steps, 1, 1000000);
   s.check_every = r.integer("check_every", s.check_every, 1, 1024);
@@ -77,6 +81,8 @@ LblSettings LblSettings::read(const Settings& settings) {
   s.skip_multiple = r.number("skip_multiple", s.skip_multiple, 0, 1);
   s.measure = r.integer("measure", 0, 0, 1) == 1;
   r.finish();
+  if (s.directions == 18 && s.blocked)
+    throw ValidationError("settings.blocked", "the 18-direction lattice runs on the whole grid only (blocked 0)");
   return s;
 }
 
@@ -146,7 +152,7 @@ StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
     why = std::string(s.blocked ? "blocks of " + std::to_string(s.block) + "^3, " +
                                       std::to_string(s.inner) + " steps per launch"
                                 : "global lattice") +
-          ", 6 directions + rest, until the change is under " + fmt(s.tolerance) + " (at most " +
+          ", " + std::to_string(s.directions) + " directions + rest, until the change is under " + fmt(s.tolerance) + " (at most " +
           std::to_string(s.max_steps) + " steps)" +
           (!d.material && s.warm ? ", warm start from the last state" : "");
   return {"diffuse", d.diffuse, why};
@@ -205,7 +211,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     next->volume = lbl::make_volume(grid, scene.medium.ior, s.smooth, s.blocked ? s.block : 1);
     next->device = lbl::upload_volume(cl, next->volume);
     for (float x : next->volume.sigma_s) next->max_sigma_s = std::max<double>(next->max_sigma_s, x);
-    lbl::LatticeOptions o{.blocked = s.blocked, .block = s.block, .inner = s.inner};
+    lbl::LatticeOptions o{.blocked = s.blocked, .block = s.block, .inner = s.inner, .directions = s.directions};
     next->lattice = std::make_unique<lbl::Lattice>(cl, lbl::lattice_coefficients(next->volume, scene.medium.g), o);
     next->deposit = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));
     next->source = scene.medium.g == 0

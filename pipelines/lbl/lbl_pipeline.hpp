@@ -15,6 +15,7 @@
 //
 // Settings: rays (2) light rays per voxel width; step (0.5) Eikonal step in voxels; smooth (1)
 // Gaussian on n, in voxels; cutoff (1e-4) rays stop under this fraction of their power;
+// directions (6) 6 (the paper's) or 18 (Geist et al.'s lattice, global form only);
 // blocked (0) the paper's blocks with interface buffers (1) or the global lattice (0, faster
 // on the CPU device, see docs/BENCHMARKS.md); block (4) b; inner (1) steps per block launch;
 // tolerance (1e-3) relative change that ends the diffusion; max_steps (20000); check_every (16);
@@ -44,6 +45,7 @@ struct LblSettings {
   bool blocked = false;
   int block = 4;
   int inner = 1;
+  int directions = 6;
   double tolerance = 1e-3;
   int max_steps = 20000;
   int check_every = 16;

@@ -97,20 +97,22 @@ LatticeCoefficients lattice_coefficients(const Volume& v, double g) {
   c.nx = v.nx;
   c.ny = v.ny;
   c.nz = v.nz;
-  c.pt.resize(3 * v.count());
-  c.ps.resize(3 * v.count());
-  c.w.resize(3 * v.count());
-  for (size_t i = 0; i < c.pt.size(); ++i) {
-    double ss = v.sigma_s[i], sa = v.sigma_t[i] - ss;
-    double ssr = (1 - g) * ss, str = ssr + sa;
-    double x = str * v.voxel;
-    double pt = -std::expm1(-x);
-    // Mean path in the voxel before a collision, (1 - exp(-x)) / sigma_t', tends to dx.
-    double path = x > 1e-6 ? pt / str : v.voxel;
-    c.pt[i] = static_cast<float>(pt);
-    c.ps[i] = static_cast<float>(str > 0 ? pt * ssr / str : 0.0);
-    c.w[i] = static_cast<float>(ss * path);
-  }
+  for (auto* a : {&c.pt, &c.ps, &c.w, &c.pt_diag, &c.ps_diag, &c.w_diag}) a->resize(3 * v.count());
+  auto fill = [&](double length, std::vector<float>& pt_out, std::vector<float>& ps_out, std::vector<float>& w_out) {
+    for (size_t i = 0; i < pt_out.size(); ++i) {
+      double ss = v.sigma_s[i], sa = v.sigma_t[i] - ss;
+      double ssr = (1 - g) * ss, str = ssr + sa;
+      double x = str * length;
+      double pt = -std::expm1(-x);
+      // Mean path before a collision, (1 - exp(-x)) / sigma_t', tends to the length.
+      double path = x > 1e-6 ? pt / str : length;
+      pt_out[i] = static_cast<float>(pt);
+      ps_out[i] = static_cast<float>(str > 0 ? pt * ssr / str : 0.0);
+      w_out[i] = static_cast<float>(ss * path);
+    }
+  };
+  fill(v.voxel, c.pt, c.ps, c.w);
+  fill(std::sqrt(2.0) * v.voxel, c.pt_diag, c.ps_diag, c.w_diag);
   return c;
 }
 

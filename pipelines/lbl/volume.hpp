@@ -38,9 +38,11 @@ void set_index(Volume& v, std::vector<float> n, double smooth_voxels);
 // dx)) / sigma_t' (scattered power per unit of power crossing the node). Primed coefficients
 // are the similarity-reduced ones (sigma_s' = (1 - g) sigma_s), which carry the anisotropy into
 // the isotropic lattice.
+// The same for the diagonal directions of the 18-direction lattice, which cross sqrt(2) dx.
 struct LatticeCoefficients {
   int nx = 0, ny = 0, nz = 0;
-  std::vector<float> pt, ps, w;  // 3 per node
+  std::vector<float> pt, ps, w;                 // 3 per node
+  std::vector<float> pt_diag, ps_diag, w_diag;  // 3 per node (18-direction lattice)
 };
 LatticeCoefficients lattice_coefficients(const Volume& v, double g);
 

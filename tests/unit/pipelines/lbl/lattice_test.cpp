@@ -34,13 +34,16 @@ LatticeCoefficients coefficients(int n, const std::function<std::pair<float, flo
           c.w[3 * node + ch] = ps;
         }
       }
+  c.pt_diag = c.pt;
+  c.ps_diag = c.ps;
+  c.w_diag = c.w;
   return c;
 }
 
-std::vector<float> random_state(size_t nodes, unsigned seed) {
+std::vector<float> random_state(size_t nodes, unsigned seed, int directions = 6) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(0.f, 1.f);
-  std::vector<float> f(18 * nodes);
+  std::vector<float> f(3 * directions * nodes);
   for (float& x : f) x = u(rng);
   return f;
 }
@@ -220,11 +223,64 @@ TEST(LblLattice, BlockedAndGlobalAgreeOnAHomogeneousCube) {
   for (size_t i = 0; i < fa.size(); ++i) ASSERT_NEAR(fa[i], fb[i], 1e-6 * (1 + fa[i])) << i;
 }
 
+// The 18-direction lattice in a closed box: diagonal packets reflect specularly at the walls and
+// edges, so nothing is lost; with absorption each step keeps 1 - pt + ps.
+TEST(LblLattice, EighteenDirectionsConserveEnergyInAClosedBox) {
+  auto c = coefficients(8, [](int i, int j, int k) {
+    float pt = 0.05f + 0.9f * ((i * 7 + j * 3 + k * 5) % 11) / 10.f;
+    return std::pair{pt, pt};
+  });
+  for (int i = 0; i < 3 * 512; ++i) c.pt_diag[i] = c.ps_diag[i] = 0.5f * c.pt[i] + 0.2f;
+  LatticeOptions o = closed(false);
+  o.directions = 18;
+  Lattice l(cl(), c, o);
+  l.set_state(random_state(l.nodes(), 4, 18));
+  double e0 = l.energy();
+  for (int round = 1; round <= 4; ++round) {
+    l.step(50);
+    EXPECT_NEAR(l.energy(), e0, 50 * round * FLT_EPSILON * e0);
+  }
+  auto absorbing = coefficients(8, [](int, int, int) { return std::pair{0.3f, 0.24f}; });
+  Lattice a(cl(), absorbing, o);
+  a.set_state(random_state(a.nodes(), 6, 18));
+  double before = a.energy();
+  a.step(10);
+  EXPECT_NEAR(a.energy(), before * std::pow(1 - 0.3 + 0.24, 10), 1e-5 * before);
+}
+
+// A point source in a homogeneous medium: at equal distances along an axis, (5, 0, 0), and off
+// it, (3, 4, 0), the 6-direction lattice channels light along the axes; the 18-direction one
+// is closer to isotropic.
+TEST(LblLattice, EighteenDirectionsAreMoreIsotropic) {
+  const int n = 24, c0 = 12;
+  auto c = coefficients(n, [](int, int, int) { return std::pair{0.4f, 0.36f}; });
+  for (size_t i = 0; i < c.pt.size(); ++i) {
+    c.pt_diag[i] = 1 - std::pow(1 - c.pt[i], std::sqrt(2.f));  // the same medium, sqrt(2) longer steps
+    c.ps_diag[i] = c.pt_diag[i] * 0.9f;
+    c.w_diag[i] = c.ps_diag[i] / 0.4f * c.pt[i] / std::sqrt(2.f);
+  }
+  std::vector<float> src(3 * size_t(n) * n * n, 0.f);
+  auto at = [&](int i, int j, int k) { return 3 * ((size_t(k) * n + j) * n + i); };
+  src[at(c0, c0, c0)] = 1.f;
+  auto ratio = [&](int directions) {
+    Lattice l(cl(), c, {.blocked = false, .directions = directions});
+    l.set_source(src);
+    EXPECT_TRUE(l.converge(1e-6, 20000, 16).converged);
+    std::vector<float> irr = l.irradiance();
+    return irr[at(c0 + 5, c0, c0)] / irr[at(c0 + 3, c0 + 4, c0)];
+  };
+  double six = ratio(6), eighteen = ratio(18);
+  EXPECT_GT(six, 1.0);  // the axis gets more
+  EXPECT_LT(std::abs(eighteen - 1), 0.5 * std::abs(six - 1));
+}
+
 TEST(LblLattice, RejectsBadShapes) {
   auto c = coefficients(6, [](int, int, int) { return std::pair{0.1f, 0.1f}; });
   EXPECT_THROW(Lattice(cl(), c, {.blocked = true, .block = 4}), std::invalid_argument);
   EXPECT_THROW(Lattice(cl(), c, {.blocked = true, .block = 2, .edges = {Edge::Periodic, Edge::Open, Edge::Open}}),
                std::invalid_argument);
+  EXPECT_THROW(Lattice(cl(), c, {.blocked = true, .block = 2, .directions = 18}), std::invalid_argument);
+  EXPECT_THROW(Lattice(cl(), c, {.blocked = false, .directions = 7}), std::invalid_argument);
 }
 
 }  // namespace
