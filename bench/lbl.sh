@@ -7,14 +7,16 @@
 #           (global lattice); the paper's blocks (b 2, 4, 8, 4 steps per launch) on the sphere:
 #           bench/out/lbl-*.csv
 #  albedo   lattice steps to convergence against albedo (sigma_t fixed): bench/out/lbl-albedo.csv
+#  interleave marching and diffusion in rounds of k steps (Table I) against in sequence (k 0), 64^3
 #  bandwidth the lattice step's GB/s against a STREAM-like copy in the same run (64^3, 128^3)
 #  frames   light change against camera-only change at 512 x 512 in a live session
-# Usage: bench/lbl.sh [SCATTERD] [PARTS...]   (parts: slab images albedo bandwidth frames; default all)
+# Usage: bench/lbl.sh [SCATTERD] [PARTS...]
+#   (parts: slab images albedo interleave bandwidth frames; default all)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 S=${1:-build/scatterd}
 shift || true
-parts=${*:-slab images albedo bandwidth frames}
+parts=${*:-slab images albedo interleave bandwidth frames}
 out=bench/out
 mkdir -p "$out"
 has() { [[ " $parts " == *" $1 "* ]]; }
@@ -62,6 +64,12 @@ if has albedo; then
       >> "$out/lbl-albedo.csv"
   done
   echo "wrote $out/lbl-albedo.csv"
+fi
+
+if has interleave; then
+  # A cold lattice for each k (warm 0), one frame each: march and diffuse stage times.
+  $S bench scenes/sphere.json --pipeline lbl --terms multiple --width 128 --height 128 --frames 1 \
+    --reference-spp 1024 --set warm=0 --sweep interleave=0,2,4,8,16,32,64 --csv "$out/lbl-interleave.csv"
 fi
 
 if has bandwidth; then

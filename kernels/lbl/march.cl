@@ -121,3 +121,70 @@ __kernel void eikonal_trace(float3 origin, float voxel, int nx, int ny, int nz,
     o[2] = x.z;
   }
 }
+
+// Marching in rounds, for interleaving with the diffusion (the paper's Table I): march_start
+// moves each ray to where it enters the grid and stores its state (position, v, power, scaled
+// power, stopping power, alive), then each march_round advances every live ray by at most `k`
+// fixed steps (straight or bent; the voxel of a step's midpoint gives its coefficients), adds
+// the deposits and counts the rays still alive.
+#define STATE_FLOATS 16
+
+__kernel void march_start(float3 origin, float voxel, int nx, int ny, int nz,
+                          __global const float* n_field, __global const float* rays, int ray_count,
+                          float cutoff, __global float* state) {
+  int r = get_global_id(0);
+  if (r >= ray_count) return;
+  Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
+  __global const float* ray = rays + RAY_FLOATS * r;
+  __global float* s = state + STATE_FLOATS * r;
+  float3 o = (float3)(ray[0], ray[1], ray[2]), d = (float3)(ray[3], ray[4], ray[5]);
+  float start = fmax(ray[6], fmax(ray[7], ray[8]));
+  float t0, t1;
+  bool alive = start > 0.0f && grid_interval(&g, o, d, &t0, &t1);
+  float3 x = o + d * (alive ? t0 : 0.0f);
+  float n = 1.0f;
+  if (alive) trilinear(&g, n_field, 1, x, &n);
+  float v[15] = {x.x, x.y, x.z, n * d.x, n * d.y, n * d.z, ray[6], ray[7], ray[8],
+                 ray[6], ray[7], ray[8], cutoff * start, alive ? 1.0f : 0.0f, 0.0f};
+  for (int i = 0; i < 15; ++i) s[i] = v[i];
+}
+
+__kernel void march_round(float3 origin, float voxel, int nx, int ny, int nz,
+                          __global const float* sigma_s, __global const float* sigma_t,
+                          __global const float* n_field, __global const float* grad_field,
+                          int ray_count, int bend, float delta, int k, float g_phase,
+                          __global float* state, __global float* deposit, __global float* source,
+                          volatile __global int* alive_count) {
+  int r = get_global_id(0);
+  if (r >= ray_count) return;
+  __global float* s = state + STATE_FLOATS * r;
+  if (s[13] == 0.0f) return;
+  Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
+  float3 x = (float3)(s[0], s[1], s[2]), v = (float3)(s[3], s[4], s[5]);
+  float3 power = (float3)(s[6], s[7], s[8]), scaled = (float3)(s[9], s[10], s[11]);
+  float stop = s[12];
+  bool alive = true;
+  for (int i = 0; i < k && alive; ++i) {
+    float3 x0 = x;
+    float ds;
+    if (bend) {
+      ds = eikonal_step(&g, n_field, grad_field, delta, &x, &v);
+    } else {
+      x = x0 + delta * normalize(v);
+      ds = delta;
+    }
+    int3 c = voxel_of(&g, 0.5f * (x0 + x));
+    if (!inside_grid(&g, c)) {
+      alive = false;
+      break;
+    }
+    deposit_piece(&g, sigma_s, sigma_t, g_phase, c, 0.5f * (x0 + x), ds, &power, &scaled, deposit,
+                  source);
+    alive = fmax(scaled.x, fmax(scaled.y, scaled.z)) > stop;
+  }
+  float out[13] = {x.x, x.y, x.z, v.x, v.y, v.z, power.x, power.y, power.z,
+                   scaled.x, scaled.y, scaled.z, alive ? 1.0f : 0.0f};
+  for (int i = 0; i < 12; ++i) s[i] = out[i];
+  s[13] = out[12];
+  if (alive) atomic_inc(alive_count);
+}

@@ -4,6 +4,7 @@
 
 #include "bake/cache.hpp"
 #include "pipelines/cl_scene.hpp"
+#include "pipelines/lbl/interleave.hpp"
 #include "pipelines/lbl/light_rays.hpp"
 #include "pipelines/stage_clock.hpp"
 #include "protocol/json_reader.hpp"
@@ -38,7 +39,7 @@ std::string light_key(const Scene& scene, const LblSettings& s) {
     for (int c = 0; c < 3; ++c)
       k.add("position", l.position[c]).add("direction", l.direction[c]).add("color", l.color[c]);
   }
-  k.add("rays", s.rays).add("step", s.step).add("cutoff", s.cutoff);
+  k.add("rays", s.rays).add("step", s.step).add("cutoff", s.cutoff).add("interleave", s.interleave);
   return k.hex();
 }
 
@@ -80,6 +81,7 @@ LblSettings LblSettings::read(const Settings& settings) {
   s.warm = r.integer("warm", 1, 0, 1) == 1;
   s.skip_multiple = r.number("skip_multiple", s.skip_multiple, 0, 1);
   s.measure = r.integer("measure", 0, 0, 1) == 1;
+  s.interleave = r.integer("interleave", 0, 0, 4096);
   r.finish();
   if (s.directions == 18 && s.blocked)
     throw ValidationError("settings.blocked", "the 18-direction lattice runs on the whole grid only (blocked 0)");
@@ -232,29 +234,43 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   }
   lbl::State& st = *state_;
   last_steps_ = 0;
+  int interleaved_steps = 0;  // lattice steps run between march rounds
   if (d.march) {
     lbl::RaySet rays = lbl::light_rays(scene.lights, st.volume, s.rays, 4096);
     cl::Buffer ray_buf = upload(cl, rays.rays);
     for (cl::Buffer* b : {&st.deposit, &st.source})
       queue.enqueueFillBuffer(*b, 0.f, 0, 3 * st.volume.count() * sizeof(float));
-    lbl::march(cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff,
-               scene.medium.g, st.deposit, st.source);
+    if (s.interleave > 0 && d.diffuse) {
+      if (!s.warm) st.lattice->clear();
+      int per_round = std::max(1, static_cast<int>(std::lround(s.interleave * s.step)));
+      lbl::InterleaveResult ir = lbl::march_interleaved(
+          cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff,
+          scene.medium.g, st.deposit, st.source, *st.lattice, s.interleave, per_round);
+      interleaved_steps = ir.lattice_steps;
+      result.plan.stages[1].reason += "; interleaved: " + std::to_string(ir.rounds) + " rounds of " +
+                                      std::to_string(s.interleave) + " steps, each followed by " +
+                                      std::to_string(per_round) + " lattice steps";
+    } else {
+      lbl::march(cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff,
+                 scene.medium.g, st.deposit, st.source);
+    }
     queue.finish();
     st.lights = light_key(scene, s);
     st.diffused = false;
     clock.stop("march");
   }
   if (d.diffuse) {
-    if (!s.warm) st.lattice->clear();
+    if (!s.warm && interleaved_steps == 0) st.lattice->clear();
     st.lattice->set_source(st.source);
     lbl::Convergence c = st.lattice->converge(s.tolerance, s.max_steps, s.check_every);
     queue.finish();
     st.diffused = true;
     st.diffusion = diffusion_key(s);
-    last_steps_ = c.steps;
+    last_steps_ = interleaved_steps + c.steps;
     for (auto& stage : result.plan.stages)
       if (stage.name == "diffuse")
-        stage.reason += c.converged ? "; converged in " + std::to_string(c.steps) + " steps"
+        stage.reason += c.converged ? "; converged in " + std::to_string(c.steps) + " steps" +
+                                          (interleaved_steps ? " after the march" : "")
                                     : "; stopped at the step bound after " + std::to_string(c.steps) +
                                           " steps (change " + fmt(c.change) + ")";
     clock.stop("diffuse");

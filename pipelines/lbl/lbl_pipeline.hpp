@@ -22,7 +22,8 @@
 // warm (1) warm start; skip_multiple (1e-3) skip the lattice when a scattered photon's chance to
 // scatter again, 1 - exp(-max sigma_s x longest side), is under this; measure (0) after a
 // diffusion, time 16 more lattice steps and 16 STREAM-like copies of the lattice state (stage
-// "bandwidth": the achieved GB/s of each).
+// "bandwidth": the achieved GB/s of each); interleave (0) k > 0 marches in rounds of k fixed
+// steps, each followed by k x step lattice steps (the paper's Table I), 0 marches then diffuses.
 #pragma once
 
 #include <memory>
@@ -52,6 +53,7 @@ struct LblSettings {
   bool warm = true;
   double skip_multiple = 1e-3;
   bool measure = false;
+  int interleave = 0;
   static LblSettings read(const Settings& settings);
 };
 

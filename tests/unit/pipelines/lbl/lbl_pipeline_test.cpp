@@ -109,6 +109,21 @@ TEST(LblPipeline, LightMoveWarmStartsTheLattice) {
   EXPECT_LT(relative_rmse(a, b, mask), 0.01);
 }
 
+// Marching in rounds interleaved with lattice steps reaches the sequential steady state (up to
+// the fixed-step march against the exact voxel crossings).
+TEST(LblPipeline, InterleavedMarchingReachesTheSameState) {
+  Scene s = sphere(24, 24);
+  Settings tight = {{"tolerance", 1e-4}};
+  LblPipeline a(test::shared_gpu()), b(test::shared_gpu());
+  Image sequential = a.render(s, {Terms::Multiple, tight}).image;
+  Settings rounds = tight;
+  rounds["interleave"] = 8;
+  RenderResult interleaved = b.render(s, {Terms::Multiple, rounds});
+  EXPECT_NE(stage(interleaved.plan, "march")->reason.find("interleaved"), std::string::npos);
+  auto mask = coverage_mask(s, voxelize(s, {.resolution = s.voxels}));
+  EXPECT_LT(relative_rmse(interleaved.image, sequential, mask), 0.02);
+}
+
 TEST(LblPipeline, PlanNamesTheSkips) {
   Scene s = sphere(16, 16);
   LblPipeline p(test::shared_gpu());
@@ -141,6 +156,8 @@ TEST(LblPipeline, RejectsBadSettingsAndTerms) {
   EXPECT_THROW(p.render(s, {Terms::All, {{"blcoked", 1}}}), ValidationError);
   EXPECT_THROW(p.render(s, {Terms::All, {{"block", 9}}}), ValidationError);
   EXPECT_THROW(p.render(s, {Terms::All, {{"tolerance", 0}}}), ValidationError);
+  EXPECT_THROW(p.render(s, {Terms::All, {{"directions", 7}}}), ValidationError);
+  EXPECT_THROW(p.render(s, {Terms::All, {{"directions", 18}, {"blocked", 1}}}), ValidationError);
   EXPECT_THROW(p.render(s, {Terms::Surface, {}}), ValidationError);
   EXPECT_EQ(make_pipeline("lbl", test::shared_gpu())->name(), "lbl");
 }
