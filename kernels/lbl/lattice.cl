@@ -66,6 +66,22 @@ __kernel void lattice_step(int nx, int ny, int nz, int edge_x, int edge_y, int e
 #ifdef LBL_B
 #define B3 (LBL_B * LBL_B * LBL_B)
 
+// Whether a packet leaving local node l along d leaves the block, and the node's index on the
+// face it leaves through (the two other local coordinates).
+bool leaves_block(int3 l, int d) {
+  int la = axis_of(l + lattice_dir(d), d / 2);
+  return la < 0 || la >= LBL_B;
+}
+
+int face_index(int3 l, int axis) {
+  return axis == 0 ? l.z * LBL_B + l.y : (axis == 1 ? l.z * LBL_B + l.x : l.y * LBL_B + l.x);
+}
+
+// Where in the interface buffer block `block` keeps what leaves it along d from local node l.
+size_t iface_slot(size_t block, int d, int3 l, int ch) {
+  return ((block * 6 + d) * LBL_B * LBL_B + face_index(l, d / 2)) * 3 + ch;
+}
+
 // The paper's blocked form: one work group per block of LBL_B^3 nodes keeps f in local memory
 // and runs `inner` steps; what leaves through a block face is averaged over those steps into the
 // interface buffer (6 faces x LBL_B^2 nodes x 3 channels per block), which the neighbour reads
@@ -93,18 +109,15 @@ __kernel void lattice_blocked(int nx, int ny, int nz, int edge_x, int edge_y, in
   for (int d = 0; d < 6; ++d) {
     int axis = d / 2;
     int3 c = lattice_dir(d);
-    int la = axis_of(l - c, axis);
-    int face = axis == 0 ? l.z * LBL_B + l.y : (axis == 1 ? l.z * LBL_B + l.x : l.y * LBL_B + l.x);
     kind[d] = 0;
     for (int ch = 0; ch < 3; ++ch) ext[d][ch] = acc[d][ch] = 0.0f;
-    if (la >= 0 && la < LBL_B) continue;  // inside the block
+    if (!leaves_block(l, d ^ 1)) continue;  // the source node is inside the block
     int3 src_blk = blk - c;
     int ba = axis_of(src_blk, axis);
     if (ba >= 0 && ba < axis_of(nb, axis)) {
       kind[d] = 1;
       size_t sb = ((size_t)src_blk.z * nb.y + src_blk.y) * nb.x + src_blk.x;
-      for (int ch = 0; ch < 3; ++ch)
-        ext[d][ch] = iface_in[((sb * 6 + d) * LBL_B * LBL_B + face) * 3 + ch];
+      for (int ch = 0; ch < 3; ++ch) ext[d][ch] = iface_in[iface_slot(sb, d, l, ch)];
     } else if (axis_of(edges, axis) == 1) {
       kind[d] = 2;
     }
@@ -125,8 +138,7 @@ __kernel void lattice_blocked(int nx, int ny, int nz, int edge_x, int edge_y, in
     barrier(CLK_LOCAL_MEM_FENCE);
     collide(pt, ps, w, src, node, a, out, e);
     for (int d = 0; d < 6; ++d) {
-      int la = axis_of(l + lattice_dir(d), d / 2);
-      bool leaves = la < 0 || la >= LBL_B;
+      bool leaves = leaves_block(l, d);
       for (int ch = 0; ch < 3; ++ch) {
         lf[(d * 3 + ch) * B3 + ln] = out[d][ch];
         if (leaves) acc[d][ch] += out[d][ch];
@@ -136,14 +148,9 @@ __kernel void lattice_blocked(int nx, int ny, int nz, int edge_x, int edge_y, in
   }
   for (int k = 0; k < 18; ++k) f_out[k * n + node] = lf[k * B3 + ln];
   for (int ch = 0; ch < 3; ++ch) irr[3 * node + ch] = e[ch];
-  for (int d = 0; d < 6; ++d) {
-    int axis = d / 2;
-    int la = axis_of(l + lattice_dir(d), axis);
-    if (la >= 0 && la < LBL_B) continue;
-    int face = axis == 0 ? l.z * LBL_B + l.y : (axis == 1 ? l.z * LBL_B + l.x : l.y * LBL_B + l.x);
-    for (int ch = 0; ch < 3; ++ch)
-      iface_out[((block * 6 + d) * LBL_B * LBL_B + face) * 3 + ch] = acc[d][ch] / inner;
-  }
+  for (int d = 0; d < 6; ++d)
+    if (leaves_block(l, d))
+      for (int ch = 0; ch < 3; ++ch) iface_out[iface_slot(block, d, l, ch)] = acc[d][ch] / inner;
 }
 
 // Fills the interface buffer from f (what each face node sends out of its block), so that a
@@ -156,14 +163,9 @@ __kernel void lattice_interfaces(int nx, int ny, int nz, __global const float* f
   int3 r = blk * LBL_B + l;
   size_t n = (size_t)nx * ny * nz, node = ((size_t)r.z * ny + r.y) * nx + r.x;
   size_t block = ((size_t)blk.z * nb.y + blk.y) * nb.x + blk.x;
-  for (int d = 0; d < 6; ++d) {
-    int axis = d / 2;
-    int la = axis_of(l + lattice_dir(d), axis);
-    if (la >= 0 && la < LBL_B) continue;
-    int face = axis == 0 ? l.z * LBL_B + l.y : (axis == 1 ? l.z * LBL_B + l.x : l.y * LBL_B + l.x);
-    for (int ch = 0; ch < 3; ++ch)
-      iface[((block * 6 + d) * LBL_B * LBL_B + face) * 3 + ch] = f[(d * 3 + ch) * n + node];
-  }
+  for (int d = 0; d < 6; ++d)
+    if (leaves_block(l, d))
+      for (int ch = 0; ch < 3; ++ch) iface[iface_slot(block, d, l, ch)] = f[(d * 3 + ch) * n + node];
 }
 #endif
 
