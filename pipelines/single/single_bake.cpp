@@ -82,6 +82,7 @@ SingleBakeParams SingleBakeParams::read(SettingsReader& r) {
   p.radius = r.number("radius", p.radius, 0.2, 2.0);
   p.candidates = r.integer("candidates", p.candidates, 2, 10);
   p.density_guide = r.integer("density_guide", p.density_guide ? 1 : 0, 0, 1) == 1;
+  p.sigma_fit = r.integer("sigma_fit", p.sigma_fit, 0, 16);
   p.seed = static_cast<uint32_t>(r.integer("seed", int(p.seed), 0, 1 << 30));
   // The elimination keeps ~25 neighbours per candidate: bound the candidates' memory (~1 GB).
   if (double(p.samples) * p.candidates > 2.5e6)
@@ -429,6 +430,43 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
       for (int c = 0; c < 3; ++c) bake.sigma_s[3 * i + c] = occ > 0 ? static_cast<float>(acc[c] / occ) : 0.f;
     }
   });
+  // sigma_fit passes (Landweber iterations) move each sample's sigma_s by the Gaussian-weighted
+  // mean residual of the splatted field sum_i w_i sigma_i G_i against the voxels (per unit medium:
+  // a boundary voxel's sigma_s holds its medium fraction, so the field is compared times the
+  // occupancy). The plain mean smooths a jump in sigma_s over the larger Gaussians of the sparser
+  // side (layers: 2x too bright next to a dense layer); the passes sharpen it back. Measured in
+  // docs/BENCHMARKS.md; more than a few passes overshoot at the jumps.
+  {
+    const int fit_passes = p.sigma_fit;
+    std::vector<double> field(3 * voxels);
+    std::vector<std::vector<double>> fpart(threads - 1, std::vector<double>(3 * voxels));
+    for (int pass = 0; pass < fit_passes; ++pass) {
+      parallel_for(size_t(n), [&](size_t a, size_t b, size_t t) {
+        std::vector<double>& out = t == 0 ? field : fpart[t - 1];
+        std::fill(out.begin(), out.end(), 0.0);
+        for (size_t i = a; i < b; ++i)
+          for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
+            for (int c = 0; c < 3; ++c) out[3 * v + c] += bake.weight[i] * e * bake.sigma_s[3 * i + c];
+          });
+      }, threads);
+      for (const auto& part : fpart)
+        for (size_t v = 0; v < 3 * voxels; ++v) field[v] += part[v];
+      parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
+        for (size_t i = a; i < b; ++i) {
+          double acc[3] = {0, 0, 0}, occ = 0;
+          for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
+            double o = g.occupancy[v];
+            if (o <= 0) return;
+            for (int c = 0; c < 3; ++c) acc[c] += e * (g.sigma_s[3 * v + c] - o * field[3 * v + c]);
+            occ += e * o;
+          });
+          if (occ > 0)
+            for (int c = 0; c < 3; ++c)
+              bake.sigma_s[3 * i + c] = static_cast<float>(std::max(0.0, bake.sigma_s[3 * i + c] + acc[c] / occ));
+        }
+      });
+    }
+  }
   clock.stop("gaussians");
   report("gaussians", 1);
 

@@ -44,6 +44,7 @@ struct SingleBakeParams {
   double radius = 0.5;     // Gaussian sigma / local spacing
   int candidates = 5;      // candidates per sample for the elimination
   bool density_guide = false;  // sample density also follows |grad sigma_t| inside the medium
+  int sigma_fit = 4;           // passes fitting each sample's sigma_s so the splatted field matches the voxels
   uint32_t seed = 1;
   // Reads directions, samples, sh_order, sh_depth, radius, candidates, seed from `r`.
   static SingleBakeParams read(SettingsReader& r);
