@@ -4,9 +4,10 @@
 #           g 0 and 0.75): bench/out/lbl-slab.csv
 #  images   relative RMSE of the multiple and all terms against the reference path tracer on
 #           sphere, layers and bunny at 128 x 128, 32^3 and 64^3 voxels, 6 and 18 directions
+#           (and the sphere's multiple term at 128^3, 6 directions)
 #           (global lattice); the paper's blocks (b 2, 4, 8, 4 steps per launch) on the sphere:
 #           bench/out/lbl-*.csv
-#  albedo   lattice steps to convergence against albedo (sigma_t fixed): bench/out/lbl-albedo.csv
+#  albedo   lattice steps to convergence against albedo (sigma_t 2.5 and 10 fixed): bench/out/lbl-albedo.csv
 #  interleave marching and diffusion in rounds of k steps (Table I) against in sequence (k 0), 64^3
 #  bandwidth the lattice step's GB/s against a STREAM-like copy in the same run (64^3, 128^3)
 #  frames   light change against camera-only change at 512 x 512 in a live session
@@ -48,20 +49,29 @@ if has images; then
       done
     done
   done
+  sed "s/\"voxels\": [0-9]*/\"voxels\": 128/" scenes/sphere.json > "$out/lbl-sphere-v128.json"
+  $S bench "$out/lbl-sphere-v128.json" --pipeline lbl --terms multiple --width 128 --height 128 --frames 1 \
+    --reference-spp 1024 --sweep directions=6 --csv "$out/lbl-sphere-v128-multiple.csv"
   $S bench "$out/lbl-sphere-v64.json" --pipeline lbl --terms multiple --width 128 --height 128 --frames 1 \
     --reference-spp 1024 --set blocked=1 --set inner=4 --sweep block=2,4,8 --csv "$out/lbl-sphere-v64-block.csv"
 fi
 
 if has albedo; then
-  echo "albedo,steps,diffuse_ms,converged" > "$out/lbl-albedo.csv"
-  for a in 0.5 0.8 0.9 0.95 0.98 0.99 0.995 0.999; do
-    jq --argjson a $a '.medium.sigma_s = [2.5 * $a, 2.5 * $a, 2.5 * $a] | .medium.sigma_a = [2.5 * (1 - $a), 2.5 * (1 - $a), 2.5 * (1 - $a)]' \
-      scenes/sphere.json > "$out/lbl-albedo.json"
-    $S render "$out/lbl-albedo.json" --pipeline lbl --terms multiple --width 64 --height 64 \
-      --out "$out/lbl-albedo.exr" --json |
-      jq -r --arg a $a '(.plan.stages[] | select(.stage == "diffuse") | .reason) as $r |
-        [$a, ($r | capture("(in|after) (?<n>[0-9]+) steps").n), .timings_ms.diffuse, ($r | test("converged"))] | @csv' \
-      >> "$out/lbl-albedo.csv"
+  # sigma_t 2.5 on 64^3 (the sphere is 5 mean free paths across) and 10 on 32^3 (20 across).
+  echo "sigma_t,voxels,albedo,steps,diffuse_ms,converged" > "$out/lbl-albedo.csv"
+  for st_v in 2.5:64 10:32; do
+    st=${st_v%:*} v=${st_v#*:}
+    for a in 0.5 0.8 0.9 0.95 0.98 0.99 0.995 0.999; do
+      jq --argjson a $a --argjson st $st --argjson v $v \
+        '.voxels = $v | .medium.sigma_s = [$st * $a, $st * $a, $st * $a] |
+         .medium.sigma_a = [$st * (1 - $a), $st * (1 - $a), $st * (1 - $a)]' \
+        scenes/sphere.json > "$out/lbl-albedo.json"
+      $S render "$out/lbl-albedo.json" --pipeline lbl --terms multiple --width 64 --height 64 \
+        --out "$out/lbl-albedo.exr" --json |
+        jq -r --arg a $a --arg st $st --arg v $v '(.plan.stages[] | select(.stage == "diffuse") | .reason) as $r |
+          [$st, $v, $a, ($r | capture("(in|after) (?<n>[0-9]+) steps").n), .timings_ms.diffuse, ($r | test("converged"))] | @csv' \
+        >> "$out/lbl-albedo.csv"
+    done
   done
   echo "wrote $out/lbl-albedo.csv"
 fi
