@@ -37,9 +37,10 @@ const QUALITY = {
   reference: { draft: { step: 0.5 }, normal: {}, high: { step: 0.125 } },
   thickness: { draft: { steps: 12, shadow_size: 512 }, normal: {}, high: { steps: 96, shadow_size: 2048 } },
   psf: { draft: { step: 1 }, normal: {}, high: { step: 0.25 } },
+  lbl: { draft: { rays: 1, tolerance: 0.003 }, normal: {}, high: { rays: 3, directions: 18, tolerance: 0.0003 } },
 };
 // The terms a live view asks of each pipeline: all it renders where it renders several orders.
-const TERMS = { surface: 'surface', psf: 'all' };
+const TERMS = { surface: 'surface', psf: 'all', lbl: 'all' };
 const settingsFor = (pipeline) => (QUALITY[pipeline] || {})[$('quality').value] || {};
 
 function hello() {
