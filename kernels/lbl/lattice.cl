@@ -20,10 +20,12 @@ int axis_of(int3 v, int a) { return a == 0 ? v.x : (a == 1 ? v.y : v.z); }
 void collide(__global const float* pt, __global const float* ps, __global const float* w,
              __global const float* src, size_t node, float a[6][3], float out[6][3],
              float irr[3]) {
+#pragma unroll
   for (int ch = 0; ch < 3; ++ch) {
     float sum = a[0][ch] + a[1][ch] + a[2][ch] + a[3][ch] + a[4][ch] + a[5][ch];
     float t = pt[3 * node + ch], s = ps[3 * node + ch];
     float iso = (s * sum + src[3 * node + ch]) * (1.0f / 6.0f);
+#pragma unroll
     for (int d = 0; d < 6; ++d) out[d][ch] = (1.0f - t) * a[d][ch] + iso;
     irr[ch] = w[3 * node + ch] * sum;
   }
@@ -37,28 +39,30 @@ __kernel void lattice_step(int nx, int ny, int nz, int edge_x, int edge_y, int e
                            __global float* irr) {
   int3 r = (int3)(get_global_id(0), get_global_id(1), get_global_id(2));
   if (r.x >= nx || r.y >= ny || r.z >= nz) return;
-  int3 dims = (int3)(nx, ny, nz), edges = (int3)(edge_x, edge_y, edge_z);
+  int dims[3] = {nx, ny, nz}, edges[3] = {edge_x, edge_y, edge_z}, rr[3] = {r.x, r.y, r.z};
   size_t n = (size_t)nx * ny * nz, node = ((size_t)r.z * ny + r.y) * nx + r.x;
+  size_t stride[3] = {1, (size_t)nx, (size_t)nx * ny};
   float a[6][3], out[6][3], e[3];
+#pragma unroll
   for (int d = 0; d < 6; ++d) {
-    int axis = d / 2;
-    int3 s = r - lattice_dir(d);
-    int sa = axis_of(s, axis), dim = axis_of(dims, axis), edge = axis_of(edges, axis);
-    bool outside = sa < 0 || sa >= dim;
-    if (outside && edge == 2) {
-      sa = (sa + dim) % dim;
-      s = (int3)(axis == 0 ? sa : s.x, axis == 1 ? sa : s.y, axis == 2 ? sa : s.z);
-      outside = false;
+    int axis = d / 2, step = (d & 1) ? -1 : 1;
+    int sa = rr[axis] - step, dim = dims[axis], edge = edges[axis];
+    // The source node along d, or where a packet comes from at the edge.
+    long src_node = (long)node - step * (long)stride[axis];
+    int from = d;
+    bool none = false;
+    if (sa < 0 || sa >= dim) {
+      if (edge == 2) src_node += (sa < 0 ? 1 : -1) * (long)dim * (long)stride[axis];
+      else if (edge == 1) { src_node = (long)node; from = d ^ 1; }
+      else none = true;
     }
-    for (int ch = 0; ch < 3; ++ch) {
-      if (!outside)
-        a[d][ch] = f_in[(d * 3 + ch) * n + ((size_t)s.z * ny + s.y) * nx + s.x];
-      else
-        a[d][ch] = edge == 1 ? f_in[((d ^ 1) * 3 + ch) * n + node] : 0.0f;
-    }
+#pragma unroll
+    for (int ch = 0; ch < 3; ++ch) a[d][ch] = none ? 0.0f : f_in[(from * 3 + ch) * n + src_node];
   }
   collide(pt, ps, w, src, node, a, out, e);
+#pragma unroll
   for (int d = 0; d < 6; ++d)
+#pragma unroll
     for (int ch = 0; ch < 3; ++ch) f_out[(d * 3 + ch) * n + node] = out[d][ch];
   for (int ch = 0; ch < 3; ++ch) irr[3 * node + ch] = e[ch];
 }
