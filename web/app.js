@@ -36,7 +36,7 @@ const QUALITY = {
   single: { draft: { samples: 5000, directions: 64 }, normal: {}, high: { samples: 100000, directions: 256 } },
   reference: { draft: { step: 0.5 }, normal: {}, high: { step: 0.125 } },
   thickness: { draft: { steps: 12, shadow_size: 512 }, normal: {}, high: { steps: 96, shadow_size: 2048 } },
-  psf: { draft: { step: 1 }, normal: {}, high: { step: 0.25 } },
+  psf: { draft: { step: 2 }, normal: {}, high: { step: 0.5 } },
   lbl: { draft: { rays: 1, tolerance: 0.003 }, normal: {}, high: { rays: 3, directions: 18, tolerance: 0.0003 } },
 };
 // The terms a live view asks of each pipeline: all it renders where it renders several orders.

@@ -6,7 +6,7 @@
 // march per light (kernels/psf/march.cl). A camera-only change reuses every pyramid; a moved
 // light rebuilds its own only. Refraction and Fresnel are neglected (straight rays).
 //
-// Settings: step (sub-step in voxels, 0.5), spacing (lookups per projected blur width, 1),
+// Settings: step (sub-step in voxels, 1), spacing (lookups per projected blur width, 1),
 // shift (the width formula's shift in scattering events, the paper's 8), atten (0 Algorithm 2's
 // weight exp(-(c/b) l) over the whole path, 1 extinction over the view segment only, 2 (default)
 // absorption only over the view segment, as equation 11's action: see kernels/psf/march.cl and
@@ -25,7 +25,7 @@
 namespace scatter {
 
 struct PsfSettings {
-  double step = 0.5;
+  double step = 1;
   double spacing = 1;
   double shift = 8;
   int atten = 2;
