@@ -60,6 +60,24 @@ std::string fmt(double v) {
   return buf;
 }
 
+// The lattice's state is the largest buffer: refuse, before voxelizing, a grid whose state the
+// device cannot allocate (the grid's sides estimated from the mesh's bounds).
+void check_lattice_size(const Scene& scene, const LblSettings& s, int margin, uint64_t max_alloc) {
+  Aabb box;
+  for (const Vec3& p : scene.mesh.positions) box.add(p);
+  Vec3 size = box.size();
+  double longest = std::max({size.x, size.y, size.z});
+  if (!(longest > 0)) return;
+  double nodes = 1;
+  for (int a = 0; a < 3; ++a) nodes *= std::ceil(size[a] / longest * scene.voxels) + 2 * margin + s.block;
+  double bytes = 3.0 * s.directions * nodes * sizeof(float);
+  if (bytes > double(max_alloc))
+    throw ValidationError("voxels", "the lbl lattice would need " + std::to_string(long(bytes / (1 << 20))) +
+                                        " MiB per state buffer, more than the device's " +
+                                        std::to_string(long(max_alloc >> 20)) + " MiB: use fewer voxels" +
+                                        (s.directions == 18 ? " or 6 directions" : ""));
+}
+
 }  // namespace
 
 LblSettings LblSettings::read(const Settings& settings) {
@@ -209,6 +227,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   if (d.material) {
     auto next = std::make_unique<lbl::State>();
     int margin = 1 + static_cast<int>(std::ceil(3 * s.smooth));
+    check_lattice_size(scene, s, margin, cl.info().max_alloc);
     VoxelGrid grid = voxelize(scene, {.resolution = scene.voxels, .margin = margin});
     next->volume = lbl::make_volume(grid, scene.medium.ior, s.smooth, s.blocked ? s.block : 1);
     next->device = lbl::upload_volume(cl, next->volume);

@@ -158,6 +158,9 @@ TEST(LblPipeline, RejectsBadSettingsAndTerms) {
   EXPECT_THROW(p.render(s, {Terms::All, {{"tolerance", 0}}}), ValidationError);
   EXPECT_THROW(p.render(s, {Terms::All, {{"directions", 7}}}), ValidationError);
   EXPECT_THROW(p.render(s, {Terms::All, {{"directions", 18}, {"blocked", 1}}}), ValidationError);
+  // A lattice the device cannot allocate is refused before anything is voxelized.
+  Scene huge = sphere(8, 512);
+  EXPECT_THROW(p.render(huge, {Terms::All, {{"directions", 18}}}), ValidationError);
   EXPECT_THROW(p.render(s, {Terms::Surface, {}}), ValidationError);
   EXPECT_EQ(make_pipeline("lbl", test::shared_gpu())->name(), "lbl");
 }
