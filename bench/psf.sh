@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Figures for the psf pipeline in docs/BENCHMARKS.md (about 40 minutes on 2 CPU cores):
+#  (PART=errors or PART=time runs one half.)
 #  - error of the multiple term (and of all terms) against the reference path tracer on sphere
 #    (g 0 and 0.9, and albedo 0.5), layers and bunny, over the attenuation choice and the width
 #    formula's shift, 128 x 128;
@@ -30,7 +31,8 @@ s["lights"] = [dict(light, position=[3 * math.cos(a), 2.0, 3 * math.sin(a)], int
 json.dump(s, open(f"{out}/sphere-4lights.json", "w"))
 PY
 small=(--width 128 --height 128 --frames 1)
-for scene in scenes/sphere.json "$out/sphere-g09.json" "$out/sphere-albedo05.json" scenes/layers.json scenes/bunny.json; do
+part=${PART:-all}  # errors | time | all
+[ "$part" = time ] || for scene in scenes/sphere.json "$out/sphere-g09.json" "$out/sphere-albedo05.json" scenes/layers.json scenes/bunny.json; do
   name=$(basename "$scene" .json)
   spp=4096
   [ "$name" = sphere-g09 ] && spp=16384
@@ -41,6 +43,7 @@ for scene in scenes/sphere.json "$out/sphere-g09.json" "$out/sphere-albedo05.jso
   $S bench "$scene" --pipeline psf --terms all "${small[@]}" --reference-spp $spp \
     --sweep atten=0,2 --csv "$out/psf-$name-all.csv"
 done
+[ "$part" = errors ] && { echo "done: $out/psf-*.csv"; exit 0; }
 $S beam --b 0.05 --a 0.0003 --g 0.9 --length 400 --photons 2000000 > "$out/psf-beam-b005.csv"
 $S beam --b 0.2 --a 0.0003 --g 0.9 --length 100 --photons 2000000 > "$out/psf-beam-b02.csv"
 for v in 64 128; do
