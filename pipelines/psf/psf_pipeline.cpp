@@ -74,9 +74,27 @@ std::vector<std::string> PsfPipeline::light_keys(const Scene& scene) const {
   return keys;
 }
 
+void PsfPipeline::check_memory(const Scene& scene) {
+  // Per light: three float4 volumes and the pyramid (1 + 1/8 + ... < 8/7 of a volume); the medium:
+  // sigma_s and sigma_t (RGB floats). The grid has at most (voxels + 2)^3 voxels.
+  const double n = std::pow(double(scene.voxels) + 2, 3);
+  const double per_light = n * 16 * (3 + 8.0 / 7), pyramid = n * 16 * 8.0 / 7;
+  const double need = per_light * std::max<size_t>(scene.lights.size(), 1) + n * 24;
+  const gpu::ClDeviceInfo& info = gpu_.cl().info();
+  const double have = 0.75 * double(info.global_memory);
+  auto mib = [](double b) { return std::to_string(static_cast<long long>(b / (1 << 20))) + " MiB"; };
+  if ((info.global_memory > 0 && need > have) || (info.max_alloc > 0 && pyramid > double(info.max_alloc)))
+    throw ValidationError("scene.voxels", "the psf pipeline needs up to " + mib(need) + " of device memory for " +
+                                        std::to_string(scene.voxels) + " voxels and " +
+                                        std::to_string(scene.lights.size()) + " lights (a light pyramid up to " +
+                                        mib(pyramid) + "); the device offers " + mib(have) + " (largest buffer " +
+                                        mib(double(info.max_alloc)) + "): use fewer voxels or lights");
+}
+
 Plan PsfPipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   PsfSettings s = PsfSettings::read(request.settings);
+  check_memory(scene);
   const bool held = medium_.cl && medium_.fingerprint == medium_fingerprint(scene);
   prepare(scene);
   Plan p{name(), request.terms, {}};

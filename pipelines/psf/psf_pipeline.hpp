@@ -57,6 +57,8 @@ class PsfPipeline : public Pipeline {
     cl::Buffer pms_buf;
   };
   void prepare(const Scene& scene);  // voxelizes and uploads unless the medium is the one held
+  // Throws ValidationError (field scene.voxels) when the volumes would not fit the device's memory.
+  void check_memory(const Scene& scene);
   std::vector<std::string> light_keys(const Scene& scene) const;
 
   gpu::Gpu& gpu_;

@@ -172,6 +172,15 @@ TEST(PsfPipeline, RefusesWhatItCannotRender) {
   EXPECT_THROW(p.render(s, {Terms::All, {{"atten", 3}}}), ValidationError);
   EXPECT_THROW(p.render(s, {Terms::All, {{"spp", 4}}}), ValidationError);
   EXPECT_THROW(p.render(s, {Terms::All, {{"step", 0}}}), ValidationError);
+  // 512^3 voxels and 16 lights: about 160 GiB of volumes; refused before anything is allocated.
+  s.voxels = 512;
+  s.lights.assign(16, s.lights[0]);
+  try {
+    p.plan(s, {Terms::All, {}});
+    FAIL() << "no error";
+  } catch (const ValidationError& e) {
+    EXPECT_NE(std::string(e.what()).find("device memory"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
