@@ -22,13 +22,13 @@ constexpr const char* kSingleBakeVersion = "single-5";
 struct SingleSettings {
   SingleBakeParams bake;
   bool clip_back = true;
-  bool exact_tr = false;
+  bool exact_tr = true;
   static SingleSettings read(const Settings& settings) {
     SettingsReader r(settings, "single");
     SingleSettings s;
     s.bake = SingleBakeParams::read(r);
     s.clip_back = r.integer("clip_back", 1, 0, 1) == 1;
-    s.exact_tr = r.integer("exact_tr", 0, 0, 1) == 1;
+    s.exact_tr = r.integer("exact_tr", 1, 0, 1) == 1;
     r.finish();
     return s;
   }

@@ -11,9 +11,10 @@
 //
 // Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 0, radius 0.5,
 // candidates 5, density_guide 0, sigma_fit 4, seed 1), clip_back (1): clip at the second surface (0: the paper's front-only
-// clipping), and exact_tr (0): 1 sums each sample's optical depth to the eye (every frame) and to
-// every light (when the light appears or moves) through the voxels (kernels/single/shade.cl)
-// instead of reading the SH, which shows how much of the error is the SH's. The term is the single-scattered radiance; the surface, refraction and Fresnel at the
+// clipping), and exact_tr (1): sum each sample's optical depth to the eye (every frame) and to
+// every light (when the light appears or moves) through the voxels (kernels/single/shade.cl);
+// 0 reads them from the samples' SH, the paper's method (measured: the SH's 25 coefficients are
+// most of the error on faces and shadows, docs/BENCHMARKS.md). The term is the single-scattered radiance; the surface, refraction and Fresnel at the
 // boundary are not included (ior is neglected, and the plan says so).
 #pragma once
 

@@ -29,7 +29,8 @@ Scene small_sphere(int size = 64, int voxels = 32) {
   return s;
 }
 
-const Settings kQuick = {{"samples", 20000}, {"directions", 64}};
+// The paper's path (SH of transmittance); the exact_tr tests set it to 1, the default.
+const Settings kQuick = {{"samples", 20000}, {"directions", 64}, {"exact_tr", 0}};
 
 // A homogeneous box seen over a corner, lit from behind and the side (cube-torus without the
 // torus): flat faces, edges and corners.
