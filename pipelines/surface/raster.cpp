@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include "gpu/error.hpp"
+#include "protocol/json_reader.hpp"
 
 namespace scatter {
 
@@ -162,6 +163,33 @@ void set_camera_uniforms(GLuint p, const Scene& scene) {
   uniform3(p, "right", frame.right);
   uniform3(p, "up", frame.up);
   glProgramUniform2f(p, glGetUniformLocation(p, "size"), float(scene.width), float(scene.height));
+}
+
+LightView light_view(const Light& l, const Scene& scene, const std::string& pipeline) {
+  Aabb b = scene.mesh.bounds();
+  Vec3 c = b.center();
+  double radius = length(b.size()) / 2 * 1.02;
+  LightView v;
+  if (l.type == Light::Type::Directional) {
+    v.direction = l.direction;
+    v.origin = c - l.direction * (2 * radius);
+    v.along_direction = true;
+    Vec3 up = std::abs(l.direction.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+    v.view = look_at(v.origin, c, up);
+    v.projection = orthographic(radius, radius * 0.5, radius * 3.5);
+    return v;
+  }
+  double dist = length(c - l.position);
+  if (dist <= radius * 1.01)
+    throw ValidationError("scene.lights", "the " + pipeline + " pipeline's shadow maps need every point or "
+                                          "spot light outside the object's bounding sphere");
+  v.origin = l.position;
+  v.direction = normalize(c - l.position);
+  Vec3 up = std::abs(v.direction.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+  v.view = look_at(l.position, c, up);
+  double half_angle = std::asin(radius / dist);
+  v.projection = perspective(2 * half_angle * 1.02, 1.0, std::max(dist - radius, dist * 1e-3), dist + radius);
+  return v;
 }
 
 }  // namespace scatter

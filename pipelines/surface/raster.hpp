@@ -71,4 +71,16 @@ void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target
                    const Mat4& projection, const Vec3& origin, const Vec3& direction,
                    bool along_direction, GLuint first_layer, float empty = 0.f);
 
+// Where a light's shadow map looks from and how it projects; `origin` and `direction` define the
+// distance the map stores (along rays from a point, or along the direction for directional light).
+struct LightView {
+  Mat4 view, projection;
+  Vec3 origin, direction;
+  bool along_direction = false;
+};
+
+// Throws ValidationError (scene.lights) for a point or spot light inside the object's bounding
+// sphere, naming `pipeline`.
+LightView light_view(const Light& l, const Scene& scene, const std::string& pipeline);
+
 }  // namespace scatter

@@ -1,11 +1,19 @@
 // `surface`: the mesh alone, rasterised with energy-normalised Blinn-Phong under the scene's
 // lights through EGL. The smallest end-to-end path; its raster pieces serve later pipelines.
+// Settings: shadows (0; 1: a distance map per light, as the thickness path's, and a facet is lit
+// only where no surface lies nearer to the light), shadow_size (1024).
 #pragma once
 
 #include "gpu/gl_objects.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace scatter {
+
+struct SurfaceSettings {
+  bool shadows = false;
+  int shadow_size = 1024;
+  static SurfaceSettings read(const Settings& settings);
+};
 
 class SurfacePipeline : public Pipeline {
  public:
@@ -17,7 +25,7 @@ class SurfacePipeline : public Pipeline {
 
  private:
   gpu::Gpu& gpu_;
-  gpu::GlObject program_;
+  gpu::GlObject program_, distance_program_;
 };
 
 }  // namespace scatter

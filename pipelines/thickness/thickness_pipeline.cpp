@@ -23,40 +23,6 @@ struct ThicknessSettings {
   }
 };
 
-// Where a light's shadow map looks from and how it projects; `origin` and `direction` define the
-// distance the map stores (along rays from a point, or along the direction for directional light).
-struct LightView {
-  Mat4 view, projection;
-  Vec3 origin, direction;
-  bool along_direction = false;
-};
-
-LightView light_view(const Light& l, const Scene& scene) {
-  Aabb b = scene.mesh.bounds();
-  Vec3 c = b.center();
-  double radius = length(b.size()) / 2 * 1.02;
-  LightView v;
-  if (l.type == Light::Type::Directional) {
-    v.direction = l.direction;
-    v.origin = c - l.direction * (2 * radius);
-    v.along_direction = true;
-    Vec3 up = std::abs(l.direction.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
-    v.view = look_at(v.origin, c, up);
-    v.projection = orthographic(radius, radius * 0.5, radius * 3.5);
-    return v;
-  }
-  double dist = length(c - l.position);
-  if (dist <= radius * 1.01)
-    throw ValidationError("scene.lights", "the thickness pipeline needs every point or spot light "
-                                          "outside the object's bounding sphere");
-  v.origin = l.position;
-  v.direction = normalize(c - l.position);
-  Vec3 up = std::abs(v.direction.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
-  v.view = look_at(l.position, c, up);
-  double half_angle = std::asin(radius / dist);
-  v.projection = perspective(2 * half_angle * 1.02, 1.0, std::max(dist - radius, dist * 1e-3), dist + radius);
-  return v;
-}
 
 }  // namespace
 
@@ -98,7 +64,7 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   std::vector<std::unique_ptr<RenderTarget>> shadows;
   std::vector<Mat4> light_matrices;
   for (const Light& l : scene.lights) {
-    LightView v = light_view(l, scene);
+    LightView v = light_view(l, scene, "thickness");
     shadows.push_back(std::make_unique<RenderTarget>(s.shadow_size, s.shadow_size));
     draw_distance(dist, mesh, *shadows.back(), v.view, v.projection, v.origin, v.direction,
                   v.along_direction, 0, 1e30f);  // off the object: no medium on the way
@@ -120,7 +86,7 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   set_light_uniforms(integ, scene.lights);
   for (size_t i = 0; i < scene.lights.size(); ++i) {
     const Light& l = scene.lights[i];
-    LightView v = light_view(l, scene);
+    LightView v = light_view(l, scene, "thickness");
     glBindTextureUnit(static_cast<GLuint>(2 + i), shadows[i]->color_texture());
     uniform1i(integ, indexed("shadow_maps", i), static_cast<int>(2 + i));
     uniform_matrix(integ, indexed("light_matrix", i), light_matrices[i]);

@@ -1,5 +1,7 @@
 #version 450 core
-// Energy-normalised Blinn-Phong under point, directional and spot lights (no shadows).
+// Energy-normalised Blinn-Phong under point, directional and spot lights; with `shadowed` set,
+// a light counts only where its distance map (shaders/thickness/distance.frag, seen from the
+// light) holds no surface nearer to it than this one, less a bias.
 // Radiance = sum over lights of (kd / pi + ks (n + 8) / (8 pi) cos^n(theta_h)) E cos(theta_i),
 // with E = intensity / r^2 for point and spot lights and E = irradiance for directional ones.
 const int MAX_LIGHTS = 16;
@@ -21,6 +23,22 @@ uniform vec3 eye;
 uniform vec3 kd;
 uniform vec3 ks;
 uniform float shininess;
+uniform int shadowed;
+uniform sampler2D shadow_maps[MAX_LIGHTS];
+uniform mat4 light_matrix[MAX_LIGHTS];      // the map's projection x view
+uniform vec3 shadow_origin[MAX_LIGHTS];     // where the map's distances are measured from
+uniform int shadow_along[MAX_LIGHTS];       // 1: along light_direction (directional lights)
+uniform float shadow_bias;
+
+// 1 when light i reaches p, else 0.
+float lit(int i, vec3 p) {
+  vec4 c = light_matrix[i] * vec4(p, 1.0);
+  vec2 uv = c.xy / c.w * 0.5 + 0.5;
+  if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
+  vec3 d = p - shadow_origin[i];
+  float t = shadow_along[i] != 0 ? dot(d, light_direction[i]) : length(d);
+  return t <= texture(shadow_maps[i], uv).r + shadow_bias ? 1.0 : 0.0;
+}
 
 layout(location = 0) out vec4 radiance;
 
@@ -47,6 +65,7 @@ void main() {
     }
     float cos_i = dot(n, l);
     if (cos_i <= 0.0) continue;
+    if (shadowed != 0 && lit(i, world_position) == 0.0) continue;
     vec3 h = normalize(l + v);
     float spec = (shininess + 8.0) / (8.0 * PI) * pow(max(dot(n, h), 0.0), shininess);
     sum += (kd / PI + ks * spec) * e * cos_i;

@@ -103,12 +103,50 @@ TEST(SurfacePipeline, SpotLightConeCutsOff) {
   EXPECT_EQ(im.at(32, 12).x, 0.0);  // on the sphere, well outside the cone
 }
 
+double total(const Image& im) {
+  double sum = 0;
+  for (float v : im.rgb) sum += v;
+  return sum;
+}
+
+// A convex object cannot shadow itself: the shadow maps change nothing (no acne from the bias).
+TEST(SurfacePipeline, ShadowsLeaveAConvexObjectAsItWas) {
+  Scene s = lambert_sphere(64);
+  SurfacePipeline p(test::shared_gpu());
+  double plain = total(p.render(s, {Terms::Surface}).image);
+  double shadowed = total(p.render(s, {Terms::Surface, {{"shadows", 1}}}).image);
+  EXPECT_GT(plain, 0);
+  EXPECT_NEAR(shadowed, plain, 0.005 * plain);
+}
+
+// A torus lit 17 degrees above its plane: the ring's near side shadows the inner wall on the
+// far side, which faces the light; the shadowed image is darker there and nowhere brighter.
+TEST(SurfacePipeline, ShadowsDarkenWhatTheObjectHidesFromTheLight) {
+  nlohmann::json j = test::minimal_scene();
+  j["mesh"] = {{"shape", "torus"}, {"major_radius", 1.0}, {"minor_radius", 0.35}, {"axis", {0, 1, 0}}};
+  j["lights"] = {{{"type", "directional"}, {"direction", {0.95, -0.3, 0}}, {"irradiance", 2.0}}};
+  j["camera"] = {{"position", {0, 4, 0.01}}, {"target", {0, 0, 0}}, {"up", {0, 0, -1}}, {"fov_deg", 45}};
+  j["image"] = {{"width", 64}, {"height", 64}};
+  Scene s = parse_scene(j, ".");
+  SurfacePipeline p(test::shared_gpu());
+  Image plain = p.render(s, {Terms::Surface}).image;
+  Image shadowed = p.render(s, {Terms::Surface, {{"shadows", 1}}}).image;
+  int darker = 0;
+  for (size_t i = 0; i < plain.rgb.size(); ++i) {
+    ASSERT_LE(shadowed.rgb[i], plain.rgb[i] + 1e-6f);
+    if (shadowed.rgb[i] < 0.5f * plain.rgb[i]) ++darker;
+  }
+  EXPECT_GT(darker, 3 * 20);  // at least 20 pixels (3 channels each) in shadow
+  EXPECT_LT(total(shadowed), 0.995 * total(plain));  // measured 0.987: the wall is a small part of the view
+}
+
 TEST(SurfacePipeline, PlanAndTermsAreChecked) {
   Scene s = lambert_sphere(16);
   SurfacePipeline p(test::shared_gpu());
   Plan plan = p.plan(s, {Terms::Surface});
   EXPECT_EQ(plan.pipeline, "surface");
-  ASSERT_EQ(plan.stages.size(), 3u);
+  ASSERT_EQ(plan.stages.size(), 4u);
+  EXPECT_FALSE(plan.stages[1].run);  // shadow maps: off by default
   RenderResult r = p.render(s, {Terms::Surface});
   ASSERT_EQ(r.timings.size(), 3u);
   for (const auto& t : r.timings) EXPECT_GE(t.ms, 0.0);
