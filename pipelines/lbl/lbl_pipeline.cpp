@@ -209,9 +209,24 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
 LblPipeline::LblPipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
 LblPipeline::~LblPipeline() = default;
 
+// The surface term: the mesh's Blinn-Phong under the lights with shadow maps (the surface
+// pipeline's, shadows on); the medium's terms (single, multiple, all) do not include it, as the
+// reference's do not.
+RenderRequest LblPipeline::surface_request(const RenderRequest& request) {
+  if (!surface_) surface_ = std::make_unique<SurfacePipeline>(gpu_);
+  RenderRequest r{Terms::Surface, {{"shadows", 1}}, request.progress};
+  return r;
+}
+
 Plan LblPipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   LblSettings s = LblSettings::read(request.settings);
+  if (request.terms == Terms::Surface) {
+    RenderRequest r = surface_request(request);  // makes surface_ first
+    Plan p = surface_->plan(scene, r);
+    p.pipeline = name();
+    return p;
+  }
   return make_plan(scene, request.terms, s, decide(state_.get(), scene, request, s));
 }
 
@@ -219,6 +234,12 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   RenderResult result;
   require_terms(*this, request.terms);
   LblSettings s = LblSettings::read(request.settings);
+  if (request.terms == Terms::Surface) {
+    RenderRequest r = surface_request(request);
+    result = surface_->render(scene, r);
+    result.plan.pipeline = name();
+    return result;
+  }
   StageClock clock(result.timings);
   gpu::ClContext& cl = gpu_.cl();
   auto& queue = cl.queue();

@@ -32,6 +32,7 @@
 #include "pipelines/lbl/lattice.hpp"
 #include "pipelines/lbl/volume.hpp"
 #include "pipelines/pipeline.hpp"
+#include "pipelines/surface/surface_pipeline.hpp"
 
 namespace scatter {
 namespace lbl {
@@ -63,7 +64,7 @@ class LblPipeline : public Pipeline {
   ~LblPipeline() override;
   std::string name() const override { return "lbl"; }
   std::vector<Terms> supported_terms() const override {
-    return {Terms::Single, Terms::Multiple, Terms::All};
+    return {Terms::Surface, Terms::Single, Terms::Multiple, Terms::All};
   }
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
@@ -73,6 +74,8 @@ class LblPipeline : public Pipeline {
  private:
   gpu::Gpu& gpu_;
   std::unique_ptr<lbl::State> state_;  // what the last frame left: volume, deposit, lattice
+  std::unique_ptr<SurfacePipeline> surface_;  // the surface term (shadowed Blinn-Phong)
+  RenderRequest surface_request(const RenderRequest& request);
   int last_steps_ = 0;
 };
 

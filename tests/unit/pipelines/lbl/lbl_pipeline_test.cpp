@@ -161,8 +161,28 @@ TEST(LblPipeline, RejectsBadSettingsAndTerms) {
   // A lattice the device cannot allocate is refused before anything is voxelized.
   Scene huge = sphere(8, 512);
   EXPECT_THROW(p.render(huge, {Terms::All, {{"directions", 18}}}), ValidationError);
-  EXPECT_THROW(p.render(s, {Terms::Surface, {}}), ValidationError);
   EXPECT_EQ(make_pipeline("lbl", test::shared_gpu())->name(), "lbl");
+}
+
+// The surface term is the shadowed Blinn-Phong of the surface pipeline, and only that.
+TEST(LblPipeline, SurfaceTermIsTheShadowedSurface) {
+  Scene s = sphere(16, 8);
+  LblPipeline p(test::shared_gpu());
+  Plan plan = p.plan(s, {Terms::Surface, {}});
+  EXPECT_EQ(plan.pipeline, "lbl");
+  ASSERT_GE(plan.stages.size(), 2u);
+  EXPECT_TRUE(plan.stages[1].run);  // shadow maps
+  RenderResult r = p.render(s, {Terms::Surface, {}});
+  EXPECT_EQ(r.plan.pipeline, "lbl");
+  Image expected = make_pipeline("surface", test::shared_gpu())->render(s, {Terms::Surface, {{"shadows", 1}}}).image;
+  ASSERT_EQ(r.image.rgb.size(), expected.rgb.size());
+  double sum = 0;
+  for (size_t i = 0; i < expected.rgb.size(); ++i) {
+    ASSERT_FLOAT_EQ(r.image.rgb[i], expected.rgb[i]);
+    sum += expected.rgb[i];
+  }
+  EXPECT_GT(sum, 0);
+  EXPECT_THROW(p.render(s, {Terms::Surface, {{"blcoked", 1}}}), ValidationError);
 }
 
 }  // namespace
