@@ -3,8 +3,8 @@
 #  slab     R and T of the lattice against the reference's transport (tau 1-16, albedo 0.5-0.999,
 #           g 0 and 0.75): bench/out/lbl-slab.csv
 #  images   relative RMSE of the multiple and all terms against the reference path tracer on
-#           sphere, layers and bunny at 128 x 128, 32^3 and 64^3 voxels, 6 and 18 directions
-#           (and the sphere's multiple term at 128^3, 6 directions)
+#           sphere, layers and bunny at 128 x 128, 32^3 and 64^3 voxels, 6 and 18 directions,
+#           and the multiple term at 128^3 with 6 directions
 #           (global lattice); the paper's blocks (b 2, 4, 8, 4 steps per launch) on the sphere:
 #           bench/out/lbl-*.csv
 #  albedo   lattice steps to convergence against albedo (sigma_t 2.5 and 10 fixed): bench/out/lbl-albedo.csv
@@ -49,9 +49,11 @@ if has images; then
       done
     done
   done
-  sed "s/\"voxels\": [0-9]*/\"voxels\": 128/" scenes/sphere.json > "$out/lbl-sphere-v128.json"
-  $S bench "$out/lbl-sphere-v128.json" --pipeline lbl --terms multiple --width 128 --height 128 --frames 1 \
-    --reference-spp 1024 --sweep directions=6 --csv "$out/lbl-sphere-v128-multiple.csv"
+  for scene in sphere layers bunny; do
+    sed "s/\"voxels\": [0-9]*/\"voxels\": 128/" scenes/$scene.json > "$out/lbl-$scene-v128.json"
+    $S bench "$out/lbl-$scene-v128.json" --pipeline lbl --terms multiple --width 128 --height 128 --frames 1 \
+      --reference-spp 1024 --sweep directions=6 --csv "$out/lbl-$scene-v128-multiple.csv"
+  done
   $S bench "$out/lbl-sphere-v64.json" --pipeline lbl --terms multiple --width 128 --height 128 --frames 1 \
     --reference-spp 1024 --set blocked=1 --set inner=4 --sweep block=2,4,8 --csv "$out/lbl-sphere-v64-block.csv"
 fi
