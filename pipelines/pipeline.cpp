@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "pipelines/auto_pipeline.hpp"
@@ -77,6 +78,12 @@ std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu, 
   std::string list;
   for (const auto& n : pipeline_names()) list += (list.empty() ? "" : ", ") + n;
   throw ValidationError("pipeline", "unknown pipeline \"" + name + "\" (known: " + list + ")");
+}
+
+std::string short_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
 }
 
 void require_terms(const Pipeline& pipeline, Terms terms) {

@@ -115,6 +115,9 @@ std::vector<std::string> pipeline_names();
 // products in `cache` (shared, content-addressed); without one they keep a private memory cache.
 std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu, BakeCache* cache = nullptr);
 
+// v with 3 significant digits, for plan reasons ("0.05", "1e+03").
+std::string short_number(double v);
+
 // Throws ValidationError unless `pipeline` supports `terms`.
 void require_terms(const Pipeline& pipeline, Terms terms);
 

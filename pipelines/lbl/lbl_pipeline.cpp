@@ -54,12 +54,6 @@ double second_scatter_bound(double max_sigma_s, double longest_side) {
   return -std::expm1(-max_sigma_s * longest_side);
 }
 
-std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", v);
-  return buf;
-}
-
 // The lattice's state is the largest buffer: refuse, before voxelizing, a grid whose state the
 // device cannot allocate (the grid's sides estimated from the mesh's bounds).
 void check_lattice_size(const Scene& scene, const LblSettings& s, int margin, uint64_t max_alloc) {
@@ -164,15 +158,15 @@ StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
   if (!d.multiple)
     why = "the single term needs no diffusion";
   else if (d.tiny)
-    why = "a scattered photon scatters again with chance at most " + fmt(d.bound) + d.bound_note +
-          " < skip_multiple " + fmt(s.skip_multiple) + ": multiple term taken as 0";
+    why = "a scattered photon scatters again with chance at most " + short_number(d.bound) + d.bound_note +
+          " < skip_multiple " + short_number(s.skip_multiple) + ": multiple term taken as 0";
   else if (!d.diffuse)
     why = "camera-only change: converged irradiance kept";
   else
     why = std::string(s.blocked ? "blocks of " + std::to_string(s.block) + "^3, " +
                                       std::to_string(s.inner) + " steps per launch"
                                 : "global lattice") +
-          ", " + std::to_string(s.directions) + " directions + rest, until the change is under " + fmt(s.tolerance) + " (at most " +
+          ", " + std::to_string(s.directions) + " directions + rest, until the change is under " + short_number(s.tolerance) + " (at most " +
           std::to_string(s.max_steps) + " steps)" +
           (!d.material && s.warm ? ", warm start from the last state" : "");
   return {"diffuse", d.diffuse, why};
@@ -182,12 +176,12 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
   Plan p{"lbl", terms, {}};
   p.stages.push_back({"volume", d.material,
                       d.material ? std::to_string(scene.voxels) + " voxels on the long side; n, grad n smoothed over " +
-                                       fmt(s.smooth) + " voxels"
+                                       short_number(s.smooth) + " voxels"
                                  : "material unchanged: volume kept"});
-  std::string path = d.bend ? "bent by the ray equation, step " + fmt(s.step) + " voxels"
+  std::string path = d.bend ? "bent by the ray equation, step " + short_number(s.step) + " voxels"
                             : "constant n: straight rays, exact voxel crossings (no gradient)";
   p.stages.push_back({"march", d.march,
-                      d.march ? std::to_string(scene.lights.size()) + " lights, " + fmt(s.rays) +
+                      d.march ? std::to_string(scene.lights.size()) + " lights, " + short_number(s.rays) +
                                     " rays per voxel width, " + path + "; deposits added by CAS atomics"
                               : "lights and material unchanged: deposit kept"});
   p.stages.push_back(diffuse_stage(d, s));
@@ -195,7 +189,7 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
     p.stages.push_back({"bandwidth", d.diffuse, d.diffuse ? "16 more lattice steps and 16 copies of its state, timed"
                                                           : "nothing diffused in this frame"});
   std::string gathers = d.single && d.multiple ? "deposit + lattice" : (d.single ? "the deposit" : "the lattice");
-  std::string phase = scene.medium.g != 0 ? "; phase taken isotropic (g " + fmt(scene.medium.g) +
+  std::string phase = scene.medium.g != 0 ? "; phase taken isotropic (g " + short_number(scene.medium.g) +
                                                 " enters the lattice and its source delta-Eddington scaled)"
                                           : "";
   p.stages.push_back({"view", true, std::string(d.bend ? "eye rays refracted by grad n" : "straight eye rays (DDA)") +
@@ -312,15 +306,15 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
         stage.reason += c.converged ? "; converged in " + std::to_string(c.steps) + " steps" +
                                           (interleaved_steps ? " after the march" : "")
                                     : "; stopped at the step bound after " + std::to_string(c.steps) +
-                                          " steps (change " + fmt(c.change) + ")";
+                                          " steps (change " + short_number(c.change) + ")";
     clock.stop("diffuse");
     if (s.measure) {
       double step_ms = st.lattice->time_steps(16), copy_ms = st.lattice->time_copy(16);
       for (auto& stage : result.plan.stages)
         if (stage.name == "bandwidth")
-          stage.reason = "lattice step " + fmt(step_ms) + " ms = " + fmt(st.lattice->step_bytes() / step_ms / 1e6) +
-                         " GB/s; STREAM-like copy " + fmt(copy_ms) + " ms = " +
-                         fmt(st.lattice->copy_bytes() / copy_ms / 1e6) + " GB/s";
+          stage.reason = "lattice step " + short_number(step_ms) + " ms = " + short_number(st.lattice->step_bytes() / step_ms / 1e6) +
+                         " GB/s; STREAM-like copy " + short_number(copy_ms) + " ms = " +
+                         short_number(st.lattice->copy_bytes() / copy_ms / 1e6) + " GB/s";
       clock.stop("bandwidth");
     }
   }

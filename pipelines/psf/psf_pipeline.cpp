@@ -28,13 +28,6 @@ std::string medium_fingerprint(const Scene& scene) {
   return s.str();
 }
 
-std::string fmt(double v, int digits = 3) {
-  std::ostringstream s;
-  s.precision(digits);
-  s << v;
-  return s.str();
-}
-
 }  // namespace
 
 PsfSettings PsfSettings::read(const Settings& settings) {
@@ -116,19 +109,19 @@ Plan PsfPipeline::plan(const Scene& scene, const RenderRequest& request) {
                                     : "every light's pyramid is reused (camera-only change)"});
   p.stages.push_back({"march_single", request.terms != Terms::Multiple,
                       request.terms == Terms::Multiple ? "single term not requested"
-                                                       : "sub-steps of " + fmt(s.step) + " voxels, light volume trilinear"});
+                                                       : "sub-steps of " + short_number(s.step) + " voxels, light volume trilinear"});
   std::string ms_reason;
   if (!multiple) ms_reason = "multiple term not requested";
   else if (thin)
-    ms_reason = "optically thin (scattering thickness " + fmt(thickness_) + " < " + fmt(s.thin) +
+    ms_reason = "optically thin (scattering thickness " + short_number(thickness_) + " < " + short_number(s.thin) +
                 "): multiple scattering is negligible";
   else
-    ms_reason = "pyramid lookups at the equation-18 width, every " + fmt(s.spacing) +
+    ms_reason = "pyramid lookups at the equation-18 width, every " + short_number(s.spacing) +
                 " projected blur width; attenuation " +
                 (s.atten == 0 ? "over the whole path (paper)" : s.atten == 1 ? "of the view segment" : "by absorption only");
   p.stages.push_back({"march_multiple", multiple && !thin, ms_reason});
   if (scene.medium.ior != 1.0)
-    p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " + fmt(scene.medium.ior) + ")"});
+    p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " + short_number(scene.medium.ior) + ")"});
   p.stages.push_back({"readback", true, "linear RGB to the host"});
   return p;
 }

@@ -9,67 +9,18 @@
 #include <thread>
 
 #include "pipelines/cl_scene.hpp"
+#include "pipelines/single/bake_support.hpp"
 #include "pipelines/single/sampling.hpp"
 #include "pipelines/single/sh.hpp"
 #include "pipelines/stage_clock.hpp"
 
 namespace scatter {
+using namespace single_detail;
 namespace {
 
 const std::vector<std::string> kProgram = {"kernels/reference/common.cl", "kernels/single/bake.cl"};
-constexpr double kCutoff = 3.0;     // Gaussians end at 3 sigma
 constexpr float kDepthClamp = 20;   // exp(-20) ~ 2e-9: deeper is dark either way
 constexpr int kMaxShell = kSingleGridMargin - 1;
-
-size_t thread_count(size_t n) {
-  return std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<size_t>(1, n / 64));
-}
-
-// Runs f(begin, end, thread) over [0, n) on `threads` threads; an exception in one is rethrown
-// after all have joined.
-template <class F>
-void parallel_for(size_t n, F&& f, size_t threads = 0) {
-  if (threads == 0) threads = thread_count(n);
-  std::vector<std::jthread> pool;
-  std::exception_ptr error;
-  std::mutex m;
-  for (size_t t = 0; t < threads; ++t)
-    pool.emplace_back([&, t] {
-      try {
-        f(n * t / threads, n * (t + 1) / threads, t);
-      } catch (...) {
-        std::lock_guard lock(m);
-        if (!error) error = std::current_exception();
-      }
-    });
-  pool.clear();  // joins
-  if (error) std::rethrow_exception(error);
-}
-
-// Voxel index range a Gaussian at p with cutoff radius R touches.
-struct Box {
-  int i0, i1, j0, j1, k0, k1;
-};
-Box support(const VoxelGrid& g, const Vec3& p, double R) {
-  auto lo = [&](double x, double o) { return std::max(0, int(std::floor((x - R - o) / g.voxel - 0.5))); };
-  auto hi = [&](double x, double o, int n) { return std::min(n - 1, int(std::ceil((x + R - o) / g.voxel - 0.5))); };
-  return {lo(p.x, g.origin.x), hi(p.x, g.origin.x, g.nx), lo(p.y, g.origin.y), hi(p.y, g.origin.y, g.ny),
-          lo(p.z, g.origin.z), hi(p.z, g.origin.z, g.nz)};
-}
-
-template <class F>
-void for_support(const VoxelGrid& g, const Vec3& p, double s, F&& f) {
-  const double R = kCutoff * s, inv = 1 / (2 * s * s);
-  Box b = support(g, p, R);
-  for (int k = b.k0; k <= b.k1; ++k)
-    for (int j = b.j0; j <= b.j1; ++j)
-      for (int i = b.i0; i <= b.i1; ++i) {
-        Vec3 d = g.center(i, j, k) - p;
-        double r2 = dot(d, d);
-        if (r2 > R * R) continue;
-        f(g.index(i, j, k), std::exp(-r2 * inv));
-      }
-}
 
 }  // namespace
 
@@ -367,106 +318,9 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   clock.stop("sampling");
   report("sampling", 1);
 
-  // 4. Gaussian weights: start from spacing^3 / Gaussian volume, then rescale each weight by the
-  //    Gaussian-weighted mean of 1 / (sum of all Gaussians) over the voxel centres of the medium
-  //    and all but the outermost shell layer.
+  // 4. Gaussian weights and each sample's sigma_s (pipelines/single/single_gaussians.cpp).
+  make_gaussians(g, layer, shell, p, bake, [&](double f) { report("gaussians", f); });
   const int n = bake.count;
-  auto pos = [&](int i) { return Vec3{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]}; };
-  bake.weight.resize(n);
-  for (int i = 0; i < n; ++i) {
-    double spacing = bake.sigma[i] / p.radius;
-    bake.weight[i] = static_cast<float>(std::pow(spacing / bake.sigma[i], 3) / std::pow(2 * std::numbers::pi, 1.5));
-  }
-  std::vector<double> sum(voxels);
-  const size_t threads = thread_count(size_t(n));
-  std::vector<std::vector<double>> partial(threads - 1, std::vector<double>(voxels));
-  auto accumulate = [&] {
-    // Each thread adds its samples into its own array; the arrays are summed after.
-    parallel_for(size_t(n), [&](size_t a, size_t b, size_t t) {
-      std::vector<double>& out = t == 0 ? sum : partial[t - 1];
-      std::fill(out.begin(), out.end(), 0.0);
-      for (size_t i = a; i < b; ++i)
-        for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) { out[v] += bake.weight[i] * e; });
-    }, threads);
-    for (const auto& part : partial)
-      for (size_t v = 0; v < voxels; ++v) sum[v] += part[v];
-  };
-  for (int pass = 0; pass < 4; ++pass) {
-    accumulate();
-    parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
-      for (size_t i = a; i < b; ++i) {
-        double num = 0, den = 0;
-        for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
-          if (layer[v] >= shell) return;
-          num += e;
-          den += e * sum[v];
-        });
-        if (den > 0) bake.weight[i] = static_cast<float>(bake.weight[i] * num / den);
-      }
-    });
-    report("gaussians", (pass + 1) / 5.0);
-  }
-  accumulate();
-  double s1 = 0, s2 = 0, cnt = 0;
-  for (size_t v = 0; v < voxels; ++v)
-    if (g.inside[v]) {
-      s1 += sum[v];
-      s2 += sum[v] * sum[v];
-      cnt += 1;
-    }
-  bake.coverage_mean = cnt > 0 ? s1 / cnt : 0;
-  bake.coverage_spread = cnt > 0 ? std::sqrt(std::max(0.0, s2 / cnt - bake.coverage_mean * bake.coverage_mean)) /
-                                       std::max(1e-30, bake.coverage_mean) : 0;
-  // Each sample's sigma_s: the Gaussian-weighted mean of the medium (boundary voxels hold
-  // sigma_s times their medium fraction, so the mean divides by the weighted occupancy).
-  bake.sigma_s.assign(3 * size_t(n), 0.f);
-  parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
-    for (size_t i = a; i < b; ++i) {
-      double acc[3] = {0, 0, 0}, occ = 0;
-      for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
-        for (int c = 0; c < 3; ++c) acc[c] += e * g.sigma_s[3 * v + c];
-        occ += e * g.occupancy[v];
-      });
-      for (int c = 0; c < 3; ++c) bake.sigma_s[3 * i + c] = occ > 0 ? static_cast<float>(acc[c] / occ) : 0.f;
-    }
-  });
-  // sigma_fit passes (Landweber iterations) move each sample's sigma_s by the Gaussian-weighted
-  // mean residual of the splatted field sum_i w_i sigma_i G_i against the voxels (per unit medium:
-  // a boundary voxel's sigma_s holds its medium fraction, so the field is compared times the
-  // occupancy). The plain mean smooths a jump in sigma_s over the larger Gaussians of the sparser
-  // side (layers: 2x too bright next to a dense layer); the passes sharpen it back. Measured in
-  // docs/BENCHMARKS.md; more than a few passes overshoot at the jumps.
-  {
-    const int fit_passes = p.sigma_fit;
-    std::vector<double> field(3 * voxels);
-    std::vector<std::vector<double>> fpart(threads - 1, std::vector<double>(3 * voxels));
-    for (int pass = 0; pass < fit_passes; ++pass) {
-      parallel_for(size_t(n), [&](size_t a, size_t b, size_t t) {
-        std::vector<double>& out = t == 0 ? field : fpart[t - 1];
-        std::fill(out.begin(), out.end(), 0.0);
-        for (size_t i = a; i < b; ++i)
-          for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
-            for (int c = 0; c < 3; ++c) out[3 * v + c] += bake.weight[i] * e * bake.sigma_s[3 * i + c];
-          });
-      }, threads);
-      for (const auto& part : fpart)
-        for (size_t v = 0; v < 3 * voxels; ++v) field[v] += part[v];
-      parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
-        for (size_t i = a; i < b; ++i) {
-          double acc[3] = {0, 0, 0}, occ = 0;
-          for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
-            double o = g.occupancy[v];
-            if (o <= 0) return;
-            for (int c = 0; c < 3; ++c) acc[c] += e * (g.sigma_s[3 * v + c] - o * field[3 * v + c]);
-            occ += e * o;
-          });
-          if (occ > 0)
-            for (int c = 0; c < 3; ++c)
-              bake.sigma_s[3 * i + c] = static_cast<float>(std::max(0.0, bake.sigma_s[3 * i + c] + acc[c] / occ));
-        }
-      });
-    }
-  }
   clock.stop("gaussians");
   report("gaussians", 1);
 

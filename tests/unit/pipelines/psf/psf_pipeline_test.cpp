@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "../../test_util.hpp"
+#include "../axis_box.hpp"
 #include "pipelines/metrics.hpp"
 #include "protocol/json_reader.hpp"
 #include "scene/voxelizer.hpp"
@@ -18,28 +19,16 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-double hg(double c, double g) { return (1 - g * g) / (4 * kPi * std::pow(1 + g * g - 2 * g * c, 1.5)); }
-
-// Box [-1, 1]^3 lit from +z by a directional light of irradiance E, seen from +z along the axis.
-Scene axis_box(double sigma_s, double sigma_a, double g) {
-  nlohmann::json j = test::minimal_scene();
-  j["mesh"] = {{"shape", "box"}, {"size", {2, 2, 2}}};
-  j["medium"] = {{"sigma_s", sigma_s}, {"sigma_a", sigma_a}, {"g", g}};
-  j["lights"] = {{{"type", "directional"}, {"direction", {0, 0, -1}}, {"irradiance", 2.0}}};
-  j["camera"] = {{"position", {0, 0, 4}}, {"fov_deg", 30}};
-  j["image"] = {{"width", 9}, {"height", 9}};  // odd: the centre pixel's ray is the axis
-  j["voxels"] = 32;                            // voxel faces fall on the box's faces
-  return parse_scene(j, ".");
-}
+using test::axis_box;
 
 float centre(const Image& im, int c) { return im.rgb[3 * (4 * 9 + 4) + c]; }
 
 TEST(PsfPipeline, SingleTermOnTheAxisMatchesClosedForm) {
-  const double ss = 0.8, sa = 0.2, g = 0.3, st = ss + sa;
+  const double ss = 0.8, sa = 0.2, g = 0.3;
   PsfPipeline p(test::shared_gpu());
   RenderResult r = p.render(axis_box(ss, sa, g), {Terms::Single, {}});
-  // L = sigma_s p(-1) E (1 - exp(-4 sigma_t)) / (2 sigma_t): light and view both travel depth s.
-  double expected = ss * hg(-1, g) * 2.0 * (1 - std::exp(-4 * st)) / (2 * st);
+  // Light and view both travel depth s (tests/unit/pipelines/axis_box.hpp).
+  double expected = test::axis_box_radiance(ss, sa, g);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(centre(r.image, c), expected, 0.01 * expected);
 }
 

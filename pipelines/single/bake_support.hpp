@@ -1,0 +1,78 @@
+// Pieces shared by the single bake's stages (single_bake.cpp, single_gaussians.cpp): threads over
+// index ranges, and the voxels a Gaussian touches. Internal to pipelines/single.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "pipelines/single/single_bake.hpp"
+#include "scene/voxelizer.hpp"
+
+namespace scatter::single_detail {
+
+constexpr double kCutoff = 3.0;  // Gaussians end at 3 sigma
+
+inline size_t thread_count(size_t n) {
+  return std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<size_t>(1, n / 64));
+}
+
+// Runs f(begin, end, thread) over [0, n) on `threads` threads; an exception in one is rethrown
+// after all have joined.
+template <class F>
+void parallel_for(size_t n, F&& f, size_t threads = 0) {
+  if (threads == 0) threads = thread_count(n);
+  std::vector<std::jthread> pool;
+  std::exception_ptr error;
+  std::mutex m;
+  for (size_t t = 0; t < threads; ++t)
+    pool.emplace_back([&, t] {
+      try {
+        f(n * t / threads, n * (t + 1) / threads, t);
+      } catch (...) {
+        std::lock_guard lock(m);
+        if (!error) error = std::current_exception();
+      }
+    });
+  pool.clear();  // joins
+  if (error) std::rethrow_exception(error);
+}
+
+// Voxel index range a Gaussian at p with cutoff radius R touches.
+struct Box {
+  int i0, i1, j0, j1, k0, k1;
+};
+inline Box support(const VoxelGrid& g, const Vec3& p, double R) {
+  auto lo = [&](double x, double o) { return std::max(0, int(std::floor((x - R - o) / g.voxel - 0.5))); };
+  auto hi = [&](double x, double o, int n) { return std::min(n - 1, int(std::ceil((x + R - o) / g.voxel - 0.5))); };
+  return {lo(p.x, g.origin.x), hi(p.x, g.origin.x, g.nx), lo(p.y, g.origin.y), hi(p.y, g.origin.y, g.ny),
+          lo(p.z, g.origin.z), hi(p.z, g.origin.z, g.nz)};
+}
+
+template <class F>
+void for_support(const VoxelGrid& g, const Vec3& p, double s, F&& f) {
+  const double R = kCutoff * s, inv = 1 / (2 * s * s);
+  Box b = support(g, p, R);
+  for (int k = b.k0; k <= b.k1; ++k)
+    for (int j = b.j0; j <= b.j1; ++j)
+      for (int i = b.i0; i <= b.i1; ++i) {
+        Vec3 d = g.center(i, j, k) - p;
+        double r2 = dot(d, d);
+        if (r2 > R * R) continue;
+        f(g.index(i, j, k), std::exp(-r2 * inv));
+      }
+}
+
+
+// Step 4 of the bake: each sample's Gaussian weight, normalised so that the Gaussians sum to one
+// over the medium and all but the outermost of the `shell` layers (`layer`: 0 medium, d the d-th
+// shell layer, 255 outside), the coverage statistics, and each sample's sigma_s (the weighted
+// mean, then `sigma_fit` passes). `report` gets the fraction done.
+void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell, const SingleBakeParams& p,
+                    SingleBake& bake, const std::function<void(double)>& report);
+
+}  // namespace scatter::single_detail

@@ -1,0 +1,114 @@
+// The single bake's Gaussians (step 4 of pipelines/single/single_bake.hpp): weights normalised to
+// a partition of one, coverage statistics, and each sample's sigma_s.
+#include <numbers>
+
+#include "pipelines/single/bake_support.hpp"
+
+namespace scatter::single_detail {
+
+void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell, const SingleBakeParams& p,
+                    SingleBake& bake, const std::function<void(double)>& report) {
+  const size_t voxels = g.count();
+  // Weights: start from spacing^3 / Gaussian volume, then rescale each weight by the
+  //    Gaussian-weighted mean of 1 / (sum of all Gaussians) over the voxel centres of the medium
+  //    and all but the outermost shell layer.
+  const int n = bake.count;
+  auto pos = [&](int i) { return Vec3{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]}; };
+  bake.weight.resize(n);
+  for (int i = 0; i < n; ++i) {
+    double spacing = bake.sigma[i] / p.radius;
+    bake.weight[i] = static_cast<float>(std::pow(spacing / bake.sigma[i], 3) / std::pow(2 * std::numbers::pi, 1.5));
+  }
+  std::vector<double> sum(voxels);
+  const size_t threads = thread_count(size_t(n));
+  std::vector<std::vector<double>> partial(threads - 1, std::vector<double>(voxels));
+  auto accumulate = [&] {
+    // Each thread adds its samples into its own array; the arrays are summed after.
+    parallel_for(size_t(n), [&](size_t a, size_t b, size_t t) {
+      std::vector<double>& out = t == 0 ? sum : partial[t - 1];
+      std::fill(out.begin(), out.end(), 0.0);
+      for (size_t i = a; i < b; ++i)
+        for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) { out[v] += bake.weight[i] * e; });
+    }, threads);
+    for (const auto& part : partial)
+      for (size_t v = 0; v < voxels; ++v) sum[v] += part[v];
+  };
+  for (int pass = 0; pass < 4; ++pass) {
+    accumulate();
+    parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
+      for (size_t i = a; i < b; ++i) {
+        double num = 0, den = 0;
+        for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
+          if (layer[v] >= shell) return;
+          num += e;
+          den += e * sum[v];
+        });
+        if (den > 0) bake.weight[i] = static_cast<float>(bake.weight[i] * num / den);
+      }
+    });
+    report((pass + 1) / 5.0);
+  }
+  accumulate();
+  double s1 = 0, s2 = 0, cnt = 0;
+  for (size_t v = 0; v < voxels; ++v)
+    if (g.inside[v]) {
+      s1 += sum[v];
+      s2 += sum[v] * sum[v];
+      cnt += 1;
+    }
+  bake.coverage_mean = cnt > 0 ? s1 / cnt : 0;
+  bake.coverage_spread = cnt > 0 ? std::sqrt(std::max(0.0, s2 / cnt - bake.coverage_mean * bake.coverage_mean)) /
+                                       std::max(1e-30, bake.coverage_mean) : 0;
+  // Each sample's sigma_s: the Gaussian-weighted mean of the medium (boundary voxels hold
+  // sigma_s times their medium fraction, so the mean divides by the weighted occupancy).
+  bake.sigma_s.assign(3 * size_t(n), 0.f);
+  parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
+    for (size_t i = a; i < b; ++i) {
+      double acc[3] = {0, 0, 0}, occ = 0;
+      for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
+        for (int c = 0; c < 3; ++c) acc[c] += e * g.sigma_s[3 * v + c];
+        occ += e * g.occupancy[v];
+      });
+      for (int c = 0; c < 3; ++c) bake.sigma_s[3 * i + c] = occ > 0 ? static_cast<float>(acc[c] / occ) : 0.f;
+    }
+  });
+  // sigma_fit passes (Landweber iterations) move each sample's sigma_s by the Gaussian-weighted
+  // mean residual of the splatted field sum_i w_i sigma_i G_i against the voxels (per unit medium:
+  // a boundary voxel's sigma_s holds its medium fraction, so the field is compared times the
+  // occupancy). The plain mean smooths a jump in sigma_s over the larger Gaussians of the sparser
+  // side (layers: 2x too bright next to a dense layer); the passes sharpen it back. Measured in
+  // docs/BENCHMARKS.md; more than a few passes overshoot at the jumps.
+  {
+    const int fit_passes = p.sigma_fit;
+    std::vector<double> field(3 * voxels);
+    std::vector<std::vector<double>> fpart(threads - 1, std::vector<double>(3 * voxels));
+    for (int pass = 0; pass < fit_passes; ++pass) {
+      parallel_for(size_t(n), [&](size_t a, size_t b, size_t t) {
+        std::vector<double>& out = t == 0 ? field : fpart[t - 1];
+        std::fill(out.begin(), out.end(), 0.0);
+        for (size_t i = a; i < b; ++i)
+          for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
+            for (int c = 0; c < 3; ++c) out[3 * v + c] += bake.weight[i] * e * bake.sigma_s[3 * i + c];
+          });
+      }, threads);
+      for (const auto& part : fpart)
+        for (size_t v = 0; v < 3 * voxels; ++v) field[v] += part[v];
+      parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
+        for (size_t i = a; i < b; ++i) {
+          double acc[3] = {0, 0, 0}, occ = 0;
+          for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) {
+            double o = g.occupancy[v];
+            if (o <= 0) return;
+            for (int c = 0; c < 3; ++c) acc[c] += e * (g.sigma_s[3 * v + c] - o * field[3 * v + c]);
+            occ += e * o;
+          });
+          if (occ > 0)
+            for (int c = 0; c < 3; ++c)
+              bake.sigma_s[3 * i + c] = static_cast<float>(std::max(0.0, bake.sigma_s[3 * i + c] + acc[c] / occ));
+        }
+      });
+    }
+  }
+}
+
+}  // namespace scatter::single_detail
