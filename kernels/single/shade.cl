@@ -5,29 +5,89 @@
 // T(to light) depends only on the light's position (or direction), so light_transmittance runs
 // for a light when it appears or moves; shade_exact runs every frame and sums the eye's DDA only.
 // Samples outside the surface (the shell) measure from `at`, their anchor inside.
+//
+// With `gradient` set, each sample's transmittance is modelled over its Gaussian as
+// T(x) = T(a) exp(-g . (x - a)), g the gradient of the channel-mean optical depth (to the eye plus
+// the lights' contribution-weighted mean) by slope-limited differences over the Gaussian's sigma
+// s. A Gaussian times that exponential is the Gaussian moved by -g s^2 and scaled by
+// exp(-g . (b - a) + |g|^2 s^2 / 2): the splat then integrates T along the view ray instead of
+// taking it at the centre, which near a face (where single scattering is strongest) the centre
+// value overestimates on one side and the clip at the surface cuts off the other.
 
-// out[3 i + c]: transmittance of channel c from sample i to light `light`.
+// Optical depth of the channel mean from o towards d over [0, t1].
+float mean_depth(const Grid* g, __global const float* sigma_t, float3 o, float3 d, float t1) {
+  return (optical_depth(g, sigma_t, 0, o, d, 0.0f, t1) + optical_depth(g, sigma_t, 1, o, d, 0.0f, t1) +
+          optical_depth(g, sigma_t, 2, o, d, 0.0f, t1)) / 3.0f;
+}
+
+bool in_medium(const Grid* g, __global const float* sigma_t, float3 p) {
+  int3 c = voxel_of(g, p);
+  return voxel_sigma(g, sigma_t, c, 0) + voxel_sigma(g, sigma_t, c, 1) + voxel_sigma(g, sigma_t, c, 2) > 0.0f;
+}
+
+// Mean optical depth from p to the target: a point (directional 0) or along -dir to infinity.
+float depth_to(const Grid* g, __global const float* sigma_t, float3 p, float3 target, int directional) {
+  if (directional) return mean_depth(g, sigma_t, p, target, INFINITY);
+  float3 d = target - p;
+  float len = length(d);
+  return len > 0.0f ? mean_depth(g, sigma_t, p, d / len, len) : 0.0f;
+}
+
+// Gradient of depth_to at a: per axis, differences over +-h to points inside the medium only
+// (outside the optical depth does not continue the inside's), the smaller of the two slopes when
+// both agree in sign and zero when they disagree (minmod: a shadow edge or a layer boundary
+// does not make a steep slope out of one side).
+float3 depth_gradient(const Grid* g, __global const float* sigma_t, float3 a, float tau0, float3 target,
+                      int directional, float h) {
+  float out[3];
+  for (int k = 0; k < 3; ++k) {
+    float3 e = (float3)(k == 0 ? h : 0.0f, k == 1 ? h : 0.0f, k == 2 ? h : 0.0f);
+    bool ip = in_medium(g, sigma_t, a + e), im = in_medium(g, sigma_t, a - e);
+    float fwd = ip ? (depth_to(g, sigma_t, a + e, target, directional) - tau0) / h : 0.0f;
+    float bwd = im ? (tau0 - depth_to(g, sigma_t, a - e, target, directional)) / h : 0.0f;
+    float s = 0.0f;
+    if (ip && im) s = fwd * bwd > 0.0f ? (fabs(fwd) < fabs(bwd) ? fwd : bwd) : 0.0f;
+    else if (ip) s = fwd;
+    else if (im) s = bwd;
+    out[k] = s;
+  }
+  return (float3)(out[0], out[1], out[2]);
+}
+
+// out[3 i + c]: transmittance of channel c from sample i to light `light`; with `gradient`,
+// grad[3 i ..]: the gradient of its channel-mean optical depth.
 __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, int nz,
-                                  __global const float* sigma_t, __global const float* at, int count,
-                                  __global const float* lights, int light, __global float* out) {
+                                  __global const float* sigma_t, __global const float* at,
+                                  __global const float* sigma, int count, __global const float* lights, int light,
+                                  int gradient, __global float* out, __global float* grad) {
   int i = get_global_id(0);
   if (i >= count) return;
   Grid grid = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
   float3 b = vload3(i, at);
+  Light L = load_light(lights, light);
+  float mean = 0.0f;
   for (int ch = 0; ch < 3; ++ch) {
     float3 wl;
     float dist;
-    light_irradiance(load_light(lights, light), b, ch, &wl, &dist);
-    out[3 * i + ch] = exp(-optical_depth(&grid, sigma_t, ch, b, wl, 0.0f, dist));
+    light_irradiance(L, b, ch, &wl, &dist);
+    float tau = optical_depth(&grid, sigma_t, ch, b, wl, 0.0f, dist);
+    out[3 * i + ch] = exp(-tau);
+    mean += tau / 3.0f;
   }
+  if (!gradient) return;
+  int directional = L.type == 1;
+  float3 g = depth_gradient(&grid, sigma_t, b, mean, directional ? -L.direction : L.position, directional, sigma[i]);
+  vstore3(g, i, grad);
 }
 
-// light_tr: light_count blocks of 3 * count floats from light_transmittance.
+// light_tr: light_count blocks of 3 * count floats from light_transmittance (light_grad alike,
+// read with `gradient`). out[i]: the factor; shift[i]: the offset of the Gaussian's centre.
 __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __global const float* sigma_t,
-                          __global const float* at, __global const float* weight,
-                          __global const float* sigma_s, int count, __global const float* lights,
-                          int light_count, __global const float* light_tr, float g_phase, float3 eye,
-                          __global float4* out) {
+                          __global const float* at, __global const float* position, __global const float* sigma,
+                          __global const float* weight, __global const float* sigma_s, int count,
+                          __global const float* lights, int light_count, __global const float* light_tr,
+                          __global const float* light_grad, int gradient, float max_gs, float g_phase, float3 eye,
+                          __global float4* out, __global float4* shift) {
   int i = get_global_id(0);
   if (i >= count) return;
   Grid grid = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
@@ -36,17 +96,43 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   float de = length(to_eye);
   float3 v = to_eye / de;
   float res[3];
+  float view_mean = 0.0f;
+  float3 light_g = (float3)(0.0f);
+  float light_w = 0.0f;
   for (int ch = 0; ch < 3; ++ch) {
-    float view = exp(-optical_depth(&grid, sigma_t, ch, b, v, 0.0f, de));
+    float tau = optical_depth(&grid, sigma_t, ch, b, v, 0.0f, de);
+    view_mean += tau / 3.0f;
+    float view = exp(-tau);
     float sum = 0.0f;
     for (int l = 0; l < light_count; ++l) {
       float3 wl;
       float dist;
       float e = light_irradiance(load_light(lights, l), b, ch, &wl, &dist);
       if (e <= 0.0f) continue;
-      sum += e * light_tr[((size_t)l * count + i) * 3 + ch] * hg_phase(dot(wl, -v), g_phase);
+      float c = e * light_tr[((size_t)l * count + i) * 3 + ch] * hg_phase(dot(wl, -v), g_phase);
+      sum += c;
+      if (gradient) {
+        light_g += c * vload3((size_t)l * count + i, light_grad);
+        light_w += c;
+      }
     }
     res[ch] = weight[i] * sigma_s[3 * i + ch] * view * sum;
   }
-  out[i] = (float4)(res[0], res[1], res[2], 0.0f);
+  float3 offset = (float3)(0.0f);
+  float scale = 1.0f;  // (without the gradient the cut-off stays at 3 s)
+  if (gradient) {
+    float s = sigma[i];
+    float3 g = depth_gradient(&grid, sigma_t, b, view_mean, eye, 0, s);
+    if (light_w > 0.0f) g += light_g / light_w;
+    // A bound on |g| s keeps a wrong slope (a corner, a thin feature) from blowing up the scale.
+    float gs = length(g) * s;
+    if (gs > max_gs) g *= max_gs / gs;
+    float3 p = vload3(i, position);
+    offset = -g * s * s;
+    scale = exp(-dot(g, p - b) + 0.5f * dot(g, g) * s * s);
+  }
+  out[i] = (float4)(res[0] * scale, res[1] * scale, res[2] * scale, 0.0f);
+  // w: the cut-off radius around the moved centre (3 s, widened by the move so that the ball
+  // around the sample's own centre, where the product is evaluated, stays covered).
+  shift[i] = (float4)(offset, 3.0f * sigma[i] + length(offset));
 }

@@ -23,12 +23,16 @@ struct SingleSettings {
   SingleBakeParams bake;
   bool clip_back = true;
   bool exact_tr = true;
+  bool tr_gradient = true;
+  double tr_gradient_max = 2.0;
   static SingleSettings read(const Settings& settings) {
     SettingsReader r(settings, "single");
     SingleSettings s;
     s.bake = SingleBakeParams::read(r);
     s.clip_back = r.integer("clip_back", 1, 0, 1) == 1;
     s.exact_tr = r.integer("exact_tr", 1, 0, 1) == 1;
+    s.tr_gradient = r.integer("tr_gradient", 1, 0, 1) == 1;
+    s.tr_gradient_max = r.number("tr_gradient_max", 2.0, 0.0, 8.0);
     r.finish();
     return s;
   }
@@ -187,10 +191,14 @@ void SinglePipeline::upload() {
   colors_ = gpu::GlObject::create(gpu::GlKind::Buffer);
   glNamedBufferStorage(colors_.get(), static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
                        GL_MAP_READ_BIT | GL_DYNAMIC_STORAGE_BIT);
+  shifts_ = gpu::GlObject::create(gpu::GlKind::Buffer);
+  const std::vector<float> zero(size_t(std::max(b.count, 1)) * 4, 0.f);
+  glNamedBufferStorage(shifts_.get(), static_cast<GLsizeiptr>(zero.size() * sizeof(float)), zero.data(),
+                       GL_DYNAMIC_STORAGE_BIT);
   current_.uploaded = true;
 }
 
-void SinglePipeline::shade_exact(const Scene& scene) {
+void SinglePipeline::shade_exact(const Scene& scene, bool gradient, double max_gs) {
   const SingleBake& b = *current_.bake;
   const VoxelGrid& g = *current_.grid;
   gpu::ClContext& cl = gpu_.cl();
@@ -199,9 +207,12 @@ void SinglePipeline::shade_exact(const Scene& scene) {
     for (size_t i = 0; i < st.size(); ++i) st[i] = g.sigma_s[i] + g.sigma_a[i];
     cl_sigma_t_ = scatter::upload(cl, st);
     cl_at_ = scatter::upload(cl, b.depth_at);
+    cl_position_ = scatter::upload(cl, b.position);
+    cl_sigma_ = scatter::upload(cl, b.sigma);
     cl_weight_ = scatter::upload(cl, b.weight);
     cl_sigma_s_ = scatter::upload(cl, b.sigma_s);
     cl_out_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
+    cl_shift_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     current_.cl_uploaded = true;
   }
   const std::vector<std::string> program = {"kernels/reference/common.cl", "kernels/single/shade.cl"};
@@ -210,38 +221,44 @@ void SinglePipeline::shade_exact(const Scene& scene) {
   const size_t block = size_t(std::max(b.count, 1)) * 3 * sizeof(float);
   // Transmittance to each light, kept while the light stays where it is (its position, or its
   // direction for a directional light, is the key).
-  std::map<std::string, cl::Buffer> still_used;
+  std::map<std::string, std::pair<cl::Buffer, cl::Buffer>> still_used;
   cl::Buffer all(cl.context(), CL_MEM_READ_WRITE, block * std::max<size_t>(scene.lights.size(), 1));
+  cl::Buffer all_grad(cl.context(), CL_MEM_READ_WRITE, block * std::max<size_t>(scene.lights.size(), 1));
   cl::Kernel per_light(cl.program(program), "light_transmittance");
   for (size_t l = 0; l < scene.lights.size(); ++l) {
     const Light& light = scene.lights[l];
     const Vec3& where = light.type == Light::Type::Directional ? light.direction : light.position;
-    std::string key = std::to_string(int(light.type)) + ":" + exact(where.x) + "," + exact(where.y) + "," + exact(where.z);
+    std::string key = std::to_string(int(light.type)) + ":" + exact(where.x) + "," + exact(where.y) + "," +
+                      exact(where.z) + (gradient ? ":g" : "");
     auto found = current_.light_tr.find(key);
-    cl::Buffer tr;
+    std::pair<cl::Buffer, cl::Buffer> tr;
     if (found != current_.light_tr.end()) {
       tr = found->second;
     } else {
-      tr = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block);
-      gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, b.count, lights,
-                    static_cast<int>(l), tr);
+      tr = {cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block), cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block)};
+      gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_sigma_, b.count,
+                    lights, static_cast<int>(l), gradient ? 1 : 0, tr.first, tr.second);
       cl.queue().enqueueNDRangeKernel(per_light, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
       ++current_.light_passes;
     }
-    cl.queue().enqueueCopyBuffer(tr, all, 0, l * block, block);
+    cl.queue().enqueueCopyBuffer(tr.first, all, 0, l * block, block);
+    if (gradient) cl.queue().enqueueCopyBuffer(tr.second, all_grad, 0, l * block, block);
     still_used[key] = tr;
   }
   current_.light_tr = std::move(still_used);
   cl::Kernel k(cl.program(program), "shade_exact");
   const Vec3& e = scene.camera.position;
   cl_float3 eye{{float(e.x), float(e.y), float(e.z)}};
-  gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_weight_, cl_sigma_s_, b.count,
-                lights, static_cast<int>(scene.lights.size()), all, float(scene.medium.g), eye, cl_out_);
+  gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_,
+                cl_sigma_s_, b.count, lights, static_cast<int>(scene.lights.size()), all, all_grad, gradient ? 1 : 0,
+                float(max_gs), float(scene.medium.g), eye, cl_out_, cl_shift_);
   cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
-  std::vector<float> out(size_t(b.count) * 4);
+  std::vector<float> out(size_t(b.count) * 4), shift(size_t(b.count) * 4);
   cl.queue().enqueueReadBuffer(cl_out_, CL_TRUE, 0, out.size() * sizeof(float), out.data());
+  cl.queue().enqueueReadBuffer(cl_shift_, CL_TRUE, 0, shift.size() * sizeof(float), shift.data());
   gpu_.gl().make_current();
   glNamedBufferSubData(colors_.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(float)), out.data());
+  glNamedBufferSubData(shifts_.get(), 0, static_cast<GLsizeiptr>(shift.size() * sizeof(float)), shift.data());
 }
 
 std::vector<float> SinglePipeline::read_shaded() const {
@@ -280,13 +297,15 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   clock.stop("depth_peel");
 
   const GLuint shade = shade_program_.get();
-  if (s.exact_tr) shade_exact(scene);
+  if (s.exact_tr) shade_exact(scene, s.tr_gradient, s.tr_gradient_max);
+  else glClearNamedBufferData(shifts_.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr);  // the SH path moves nothing
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, positions_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, weights_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, sigma_s_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, sh_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, colors_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, sigmas_.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, shifts_.get());
   uniform1i(shade, "count", b.count);
   uniform1i(shade, "bands", b.params.sh_bands);
   uniform1i(shade, "depth_mode", b.params.sh_depth ? 1 : 0);
@@ -325,7 +344,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glDisable(GL_DEPTH_CLAMP);
   glBindTextureUnit(0, 0);
   glBindTextureUnit(1, 0);
-  for (GLuint i = 0; i < 6; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+  for (GLuint i = 0; i < 7; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
   gpu::check_gl("single splat");
   glFinish();
   clock.stop("splat");

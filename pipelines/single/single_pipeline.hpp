@@ -14,7 +14,10 @@
 // clipping), and exact_tr (1): sum each sample's optical depth to the eye (every frame) and to
 // every light (when the light appears or moves) through the voxels (kernels/single/shade.cl);
 // 0 reads them from the samples' SH, the paper's method (measured: the SH's 25 coefficients are
-// most of the error on faces and shadows, docs/BENCHMARKS.md). The term is the single-scattered radiance; the surface, refraction and Fresnel at the
+// most of the error on faces and shadows, docs/BENCHMARKS.md). With exact_tr, tr_gradient (1)
+// models the transmittance over each Gaussian as exponential in the position (the gradient of
+// the optical depth by slope-limited differences), which moves and scales the Gaussian, and
+// tr_gradient_max (2) bounds |gradient| x sigma. The term is the single-scattered radiance; the surface, refraction and Fresnel at the
 // boundary are not included (ior is neglected, and the plan says so).
 #pragma once
 
@@ -59,20 +62,23 @@ class SinglePipeline : public Pipeline {
     std::shared_ptr<const VoxelGrid> grid;        // the medium it was baked from (exact_tr)
     bool uploaded = false;
     bool cl_uploaded = false;
-    std::map<std::string, cl::Buffer> light_tr;  // exact_tr: transmittance to each light, by its place
+    // exact_tr: transmittance to each light and (tr_gradient) its optical depth's gradient, by
+    // the light's place and whether the gradient was computed
+    std::map<std::string, std::pair<cl::Buffer, cl::Buffer>> light_tr;
     int light_passes = 0;                         // light_tr computations so far (tests)
   };
   void upload();
   // exact_tr: the per-sample factors by kernels/single/shade.cl, written into colors_.
-  void shade_exact(const Scene& scene);
+  // With `gradient`, also each Gaussian's offset into shifts_ (kernels/single/shade.cl).
+  void shade_exact(const Scene& scene, bool gradient, double max_gs);
 
   gpu::Gpu& gpu_;
   BakeCache* cache_;
   std::unique_ptr<BakeCache> own_cache_;
   Current current_;
   gpu::GlObject distance_program_, shade_program_, splat_program_, empty_vao_;
-  gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_;
-  cl::Buffer cl_sigma_t_, cl_at_, cl_weight_, cl_sigma_s_, cl_out_;
+  gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_;
+  cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_sigma_s_, cl_out_, cl_shift_;
 };
 
 }  // namespace scatter

@@ -5,6 +5,7 @@
 // clips only against the first), in closed form with erf.
 flat in vec3 center;
 flat in float gauss_sigma;
+flat in float cutoff;
 flat in vec3 factor;
 
 uniform sampler2D front;  // distance from the eye to the first surface (0 where none)
@@ -32,7 +33,7 @@ void main() {
   vec3 to = center - eye;
   float tc = dot(to, d);
   float h2 = max(dot(to, to) - tc * tc, 0.0);
-  float r2 = 9.0 * gauss_sigma * gauss_sigma;
+  float r2 = cutoff * cutoff;
   if (h2 >= r2) discard;
   float half_chord = sqrt(r2 - h2);
   float x = max(tc - half_chord, ta);

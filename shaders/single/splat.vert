@@ -4,21 +4,26 @@
 layout(std430, binding = 0) readonly buffer Positions { float position[]; };
 layout(std430, binding = 5) readonly buffer Sigmas { float sigma[]; };
 layout(std430, binding = 4) readonly buffer Colors { vec4 color[]; };
+// Offset of the Gaussian's centre (exact_tr with tr_gradient: kernels/single/shade.cl) and its
+// cut-off radius if above 3 sigma, else zeros.
+layout(std430, binding = 6) readonly buffer Shifts { vec4 shift[]; };
 
 uniform mat4 view_projection;
 uniform vec3 eye;
 
 flat out vec3 center;
 flat out float gauss_sigma;
+flat out float cutoff;  // radius of the ball the Gaussian is integrated over
 flat out vec3 factor;
 
 void main() {
   uint i = uint(gl_InstanceID);
-  center = vec3(position[3u * i], position[3u * i + 1u], position[3u * i + 2u]);
+  center = vec3(position[3u * i], position[3u * i + 1u], position[3u * i + 2u]) + shift[i].xyz;
   gauss_sigma = sigma[i];
   factor = color[i].rgb;
   vec2 corner = vec2(gl_VertexID & 1, (gl_VertexID >> 1) & 1) * 2.0 - 1.0;
-  float radius = 3.0 * gauss_sigma;
+  float radius = max(3.0 * gauss_sigma, shift[i].w);
+  cutoff = radius;
   vec3 to = center - eye;
   float dist = length(to);
   if (dist < radius * 1.05 || dot(factor, factor) == 0.0) {
