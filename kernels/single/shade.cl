@@ -36,21 +36,29 @@ float depth_to(const Grid* g, __global const float* sigma_t, float3 p, float3 ta
 // Gradient of depth_to at a: per axis, differences over +-h to points inside the medium only
 // (outside the optical depth does not continue the inside's), the smaller of the two slopes when
 // both agree in sign and zero when they disagree (minmod: a shadow edge or a layer boundary
-// does not make a steep slope out of one side).
+// does not make a steep slope out of one side). *curv: the second differences where both sides
+// are inside (else zero).
 float3 depth_gradient(const Grid* g, __global const float* sigma_t, float3 a, float tau0, float3 target,
-                      int directional, float h) {
-  float out[3];
+                      int directional, float h, float3* curv) {
+  float out[3], c2[3];
   for (int k = 0; k < 3; ++k) {
     float3 e = (float3)(k == 0 ? h : 0.0f, k == 1 ? h : 0.0f, k == 2 ? h : 0.0f);
     bool ip = in_medium(g, sigma_t, a + e), im = in_medium(g, sigma_t, a - e);
     float fwd = ip ? (depth_to(g, sigma_t, a + e, target, directional) - tau0) / h : 0.0f;
     float bwd = im ? (tau0 - depth_to(g, sigma_t, a - e, target, directional)) / h : 0.0f;
     float s = 0.0f;
-    if (ip && im) s = fwd * bwd > 0.0f ? (fabs(fwd) < fabs(bwd) ? fwd : bwd) : 0.0f;
-    else if (ip) s = fwd;
-    else if (im) s = bwd;
+    c2[k] = 0.0f;
+    if (ip && im) {
+      s = fwd * bwd > 0.0f ? (fabs(fwd) < fabs(bwd) ? fwd : bwd) : 0.0f;
+      c2[k] = (fwd - bwd) / h;
+    } else if (ip) {
+      s = fwd;
+    } else if (im) {
+      s = bwd;
+    }
     out[k] = s;
   }
+  *curv = (float3)(c2[0], c2[1], c2[2]);
   return (float3)(out[0], out[1], out[2]);
 }
 
@@ -76,8 +84,11 @@ __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, in
   }
   if (!gradient) return;
   int directional = L.type == 1;
-  float3 g = depth_gradient(&grid, sigma_t, b, mean, directional ? -L.direction : L.position, directional, sigma[i]);
-  vstore3(g, i, grad);
+  float3 curv;
+  float3 g = depth_gradient(&grid, sigma_t, b, mean, directional ? -L.direction : L.position, directional, sigma[i],
+                            &curv);
+  vstore3(g, 2 * i, grad);
+  vstore3(curv, 2 * i + 1, grad);
 }
 
 // light_tr: light_count blocks of 3 * count floats from light_transmittance (light_grad alike,
@@ -86,8 +97,8 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
                           __global const float* at, __global const float* position, __global const float* sigma,
                           __global const float* weight, __global const float* sigma_s, int count,
                           __global const float* lights, int light_count, __global const float* light_tr,
-                          __global const float* light_grad, int gradient, float max_gs, float g_phase, float3 eye,
-                          __global float4* out, __global float4* shift) {
+                          __global const float* light_grad, int gradient, int hessian, float max_gs, float g_phase, float3 eye,
+                          __global float4* out, __global float4* shift, __global float4* axes) {
   int i = get_global_id(0);
   if (i >= count) return;
   Grid grid = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
@@ -97,7 +108,7 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   float3 v = to_eye / de;
   float res[3];
   float view_mean = 0.0f;
-  float3 light_g = (float3)(0.0f);
+  float3 light_g = (float3)(0.0f), light_c = (float3)(0.0f);
   float light_w = 0.0f;
   for (int ch = 0; ch < 3; ++ch) {
     float tau = optical_depth(&grid, sigma_t, ch, b, v, 0.0f, de);
@@ -112,27 +123,46 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
       float c = e * light_tr[((size_t)l * count + i) * 3 + ch] * hg_phase(dot(wl, -v), g_phase);
       sum += c;
       if (gradient) {
-        light_g += c * vload3((size_t)l * count + i, light_grad);
+        light_g += c * vload3(2 * ((size_t)l * count + i), light_grad);
+        light_c += c * vload3(2 * ((size_t)l * count + i) + 1, light_grad);
         light_w += c;
       }
     }
     res[ch] = weight[i] * sigma_s[3 * i + ch] * view * sum;
   }
   float3 offset = (float3)(0.0f);
-  float scale = 1.0f;  // (without the gradient the cut-off stays at 3 s)
+  float scale = 1.0f;
+  float s = sigma[i];
+  float3 axis = (float3)(s);
   if (gradient) {
-    float s = sigma[i];
-    float3 g = depth_gradient(&grid, sigma_t, b, view_mean, eye, 0, s);
-    if (light_w > 0.0f) g += light_g / light_w;
+    float3 curv;
+    float3 g = depth_gradient(&grid, sigma_t, b, view_mean, eye, 0, s, &curv);
+    if (light_w > 0.0f) {
+      g += light_g / light_w;
+      curv += light_c / light_w;
+    }
     // A bound on |g| s keeps a wrong slope (a corner, a thin feature) from blowing up the scale.
     float gs = length(g) * s;
     if (gs > max_gs) g *= max_gs / gs;
+    if (!hessian) curv = (float3)(0.0f);
+    // tau(x) ~ tau(a) + g.(x - a) + 1/2 sum_k curv_k (x_k - a_k)^2 around the sample's centre p:
+    // slope g + curv (p - a), precision per axis 1/s^2 + curv (kept within [1/(2s)^2, (2/s)^2]).
     float3 p = vload3(i, position);
-    offset = -g * s * s;
-    scale = exp(-dot(g, p - b) + 0.5f * dot(g, g) * s * s);
+    float3 d = p - b;
+    float inv = 1.0f / (s * s);
+    float3 prec = clamp(inv + curv, 0.25f * inv, 4.0f * inv);
+    curv = prec - inv;
+    float3 gp = g + curv * d;
+    offset = -gp / prec;
+    scale = exp(-dot(g, d) - 0.5f * dot(curv * d, d) + 0.5f * dot(gp * gp, 1.0f / prec));
+    axis = rsqrt(prec);
   }
   out[i] = (float4)(res[0] * scale, res[1] * scale, res[2] * scale, 0.0f);
-  // w: the cut-off radius around the moved centre (3 s, widened by the move so that the ball
+  // w: the cut-off radius around the moved centre (3 sigma, widened by the move so that the ball
   // around the sample's own centre, where the product is evaluated, stays covered).
-  shift[i] = (float4)(offset, 3.0f * sigma[i] + length(offset));
+  float smax = fmax(axis.x, fmax(axis.y, axis.z));
+  shift[i] = (float4)(offset, 3.0f * fmax(smax, s) + length(offset));
+  // The Gaussian's standard deviation per axis; w: its amplitude relative to the isotropic one's
+  // (already in the factor: 1).
+  axes[i] = (float4)(axis, 1.0f);
 }

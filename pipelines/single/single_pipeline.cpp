@@ -25,6 +25,7 @@ struct SingleSettings {
   bool exact_tr = true;
   bool tr_gradient = true;
   double tr_gradient_max = 2.0;
+  bool tr_hessian = true;
   static SingleSettings read(const Settings& settings) {
     SettingsReader r(settings, "single");
     SingleSettings s;
@@ -33,6 +34,7 @@ struct SingleSettings {
     s.exact_tr = r.integer("exact_tr", 1, 0, 1) == 1;
     s.tr_gradient = r.integer("tr_gradient", 1, 0, 1) == 1;
     s.tr_gradient_max = r.number("tr_gradient_max", 2.0, 0.0, 8.0);
+    s.tr_hessian = r.integer("tr_hessian", 1, 0, 1) == 1;
     r.finish();
     return s;
   }
@@ -195,10 +197,16 @@ void SinglePipeline::upload() {
   const std::vector<float> zero(size_t(std::max(b.count, 1)) * 4, 0.f);
   glNamedBufferStorage(shifts_.get(), static_cast<GLsizeiptr>(zero.size() * sizeof(float)), zero.data(),
                        GL_DYNAMIC_STORAGE_BIT);
+  // Per-axis standard deviations (the SH path's: each sample's own sigma).
+  std::vector<float> axes(size_t(std::max(b.count, 1)) * 4, 0.f);
+  for (int i = 0; i < b.count; ++i) std::fill_n(&axes[4 * size_t(i)], 4, b.sigma[i]);
+  axes_ = gpu::GlObject::create(gpu::GlKind::Buffer);
+  glNamedBufferStorage(axes_.get(), static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data(),
+                       GL_DYNAMIC_STORAGE_BIT);
   current_.uploaded = true;
 }
 
-void SinglePipeline::shade_exact(const Scene& scene, bool gradient, double max_gs) {
+void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian, double max_gs) {
   const SingleBake& b = *current_.bake;
   const VoxelGrid& g = *current_.grid;
   gpu::ClContext& cl = gpu_.cl();
@@ -213,6 +221,7 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, double max_g
     cl_sigma_s_ = scatter::upload(cl, b.sigma_s);
     cl_out_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     cl_shift_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
+    cl_axes_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     current_.cl_uploaded = true;
   }
   const std::vector<std::string> program = {"kernels/reference/common.cl", "kernels/single/shade.cl"};
@@ -223,7 +232,7 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, double max_g
   // direction for a directional light, is the key).
   std::map<std::string, std::pair<cl::Buffer, cl::Buffer>> still_used;
   cl::Buffer all(cl.context(), CL_MEM_READ_WRITE, block * std::max<size_t>(scene.lights.size(), 1));
-  cl::Buffer all_grad(cl.context(), CL_MEM_READ_WRITE, block * std::max<size_t>(scene.lights.size(), 1));
+  cl::Buffer all_grad(cl.context(), CL_MEM_READ_WRITE, 2 * block * std::max<size_t>(scene.lights.size(), 1));
   cl::Kernel per_light(cl.program(program), "light_transmittance");
   for (size_t l = 0; l < scene.lights.size(); ++l) {
     const Light& light = scene.lights[l];
@@ -235,14 +244,14 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, double max_g
     if (found != current_.light_tr.end()) {
       tr = found->second;
     } else {
-      tr = {cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block), cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block)};
+      tr = {cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block), cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 2 * block)};
       gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_sigma_, b.count,
                     lights, static_cast<int>(l), gradient ? 1 : 0, tr.first, tr.second);
       cl.queue().enqueueNDRangeKernel(per_light, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
       ++current_.light_passes;
     }
     cl.queue().enqueueCopyBuffer(tr.first, all, 0, l * block, block);
-    if (gradient) cl.queue().enqueueCopyBuffer(tr.second, all_grad, 0, l * block, block);
+    if (gradient) cl.queue().enqueueCopyBuffer(tr.second, all_grad, 0, 2 * l * block, 2 * block);
     still_used[key] = tr;
   }
   current_.light_tr = std::move(still_used);
@@ -251,14 +260,16 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, double max_g
   cl_float3 eye{{float(e.x), float(e.y), float(e.z)}};
   gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_,
                 cl_sigma_s_, b.count, lights, static_cast<int>(scene.lights.size()), all, all_grad, gradient ? 1 : 0,
-                float(max_gs), float(scene.medium.g), eye, cl_out_, cl_shift_);
+                hessian ? 1 : 0, float(max_gs), float(scene.medium.g), eye, cl_out_, cl_shift_, cl_axes_);
   cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
-  std::vector<float> out(size_t(b.count) * 4), shift(size_t(b.count) * 4);
+  std::vector<float> out(size_t(b.count) * 4), shift(size_t(b.count) * 4), axes(size_t(b.count) * 4);
   cl.queue().enqueueReadBuffer(cl_out_, CL_TRUE, 0, out.size() * sizeof(float), out.data());
   cl.queue().enqueueReadBuffer(cl_shift_, CL_TRUE, 0, shift.size() * sizeof(float), shift.data());
+  cl.queue().enqueueReadBuffer(cl_axes_, CL_TRUE, 0, axes.size() * sizeof(float), axes.data());
   gpu_.gl().make_current();
   glNamedBufferSubData(colors_.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(float)), out.data());
   glNamedBufferSubData(shifts_.get(), 0, static_cast<GLsizeiptr>(shift.size() * sizeof(float)), shift.data());
+  glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data());
 }
 
 std::vector<float> SinglePipeline::read_shaded() const {
@@ -297,8 +308,16 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   clock.stop("depth_peel");
 
   const GLuint shade = shade_program_.get();
-  if (s.exact_tr) shade_exact(scene, s.tr_gradient, s.tr_gradient_max);
-  else glClearNamedBufferData(shifts_.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr);  // the SH path moves nothing
+  if (s.exact_tr) {
+    shade_exact(scene, s.tr_gradient, s.tr_hessian, s.tr_gradient_max);
+  } else if (current_.moved) {
+    // The SH path moves and stretches nothing: back to the samples' own Gaussians.
+    glClearNamedBufferData(shifts_.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
+    std::vector<float> axes(size_t(std::max(b.count, 1)) * 4, 0.f);
+    for (int i = 0; i < b.count; ++i) std::fill_n(&axes[4 * size_t(i)], 4, b.sigma[i]);
+    glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data());
+  }
+  current_.moved = s.exact_tr;
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, positions_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, weights_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, sigma_s_.get());
@@ -306,6 +325,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, colors_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, sigmas_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, shifts_.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, axes_.get());
   uniform1i(shade, "count", b.count);
   uniform1i(shade, "bands", b.params.sh_bands);
   uniform1i(shade, "depth_mode", b.params.sh_depth ? 1 : 0);
@@ -344,7 +364,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glDisable(GL_DEPTH_CLAMP);
   glBindTextureUnit(0, 0);
   glBindTextureUnit(1, 0);
-  for (GLuint i = 0; i < 7; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+  for (GLuint i = 0; i < 8; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
   gpu::check_gl("single splat");
   glFinish();
   clock.stop("splat");

@@ -66,19 +66,20 @@ class SinglePipeline : public Pipeline {
     // the light's place and whether the gradient was computed
     std::map<std::string, std::pair<cl::Buffer, cl::Buffer>> light_tr;
     int light_passes = 0;                         // light_tr computations so far (tests)
+    bool moved = false;                           // shifts_ / axes_ hold exact_tr's last values
   };
   void upload();
   // exact_tr: the per-sample factors by kernels/single/shade.cl, written into colors_.
   // With `gradient`, also each Gaussian's offset into shifts_ (kernels/single/shade.cl).
-  void shade_exact(const Scene& scene, bool gradient, double max_gs);
+  void shade_exact(const Scene& scene, bool gradient, bool hessian, double max_gs);
 
   gpu::Gpu& gpu_;
   BakeCache* cache_;
   std::unique_ptr<BakeCache> own_cache_;
   Current current_;
   gpu::GlObject distance_program_, shade_program_, splat_program_, empty_vao_;
-  gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_;
-  cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_sigma_s_, cl_out_, cl_shift_;
+  gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_;
+  cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_sigma_s_, cl_out_, cl_shift_, cl_axes_;
 };
 
 }  // namespace scatter

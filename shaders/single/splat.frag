@@ -4,7 +4,7 @@
 // y = min(ball exit, second surface) (the second clip, by depth peeling, is optional: the paper
 // clips only against the first), in closed form with erf.
 flat in vec3 center;
-flat in float gauss_sigma;
+flat in vec3 gauss_sigma;  // per axis
 flat in float cutoff;
 flat in vec3 factor;
 
@@ -30,21 +30,27 @@ void main() {
   if (ta <= 0.0) discard;
   vec2 s = gl_FragCoord.xy / size * 2.0 - 1.0;
   vec3 d = normalize(forward + right * s.x + up * s.y);
+  // Along the ray x(t) = eye + t d the exponent sum_k (x_k - c_k)^2 / (2 s_k^2) is
+  // (A t^2 + 2 B t + C) / 2: a Gaussian in t centred at -B / A.
+  vec3 prec = 1.0 / (gauss_sigma * gauss_sigma);
+  vec3 o = eye - center;
+  float A = dot(prec, d * d), B = dot(prec, o * d), C = dot(prec, o * o);
+  float tc = -B / A;
+  float q = max(C - B * B / A, 0.0);  // twice the exponent at the peak
   vec3 to = center - eye;
-  float tc = dot(to, d);
-  float h2 = max(dot(to, to) - tc * tc, 0.0);
+  float tm = dot(to, d);  // the ball's chord is about the centre's closest point
+  float h2 = max(dot(to, to) - tm * tm, 0.0);
   float r2 = cutoff * cutoff;
   if (h2 >= r2) discard;
   float half_chord = sqrt(r2 - h2);
-  float x = max(tc - half_chord, ta);
-  float y = tc + half_chord;
+  float x = max(tm - half_chord, ta);
+  float y = tm + half_chord;
   if (clip_back != 0) {
     float tb = texelFetch(back, px, 0).r;
     if (tb > ta) y = min(y, tb);
   }
   if (y <= x) discard;
-  float k = 0.70710678 / gauss_sigma;
-  float integral = exp(-h2 / (2.0 * gauss_sigma * gauss_sigma)) * gauss_sigma * 1.25331414 *
-                   (erf_approx((y - tc) * k) - erf_approx((x - tc) * k));
+  float k = sqrt(0.5 * A);
+  float integral = exp(-0.5 * q) * 0.88622693 / k * (erf_approx((y - tc) * k) - erf_approx((x - tc) * k));
   radiance = vec4(factor * integral, 0.0);
 }

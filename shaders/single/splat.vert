@@ -7,22 +7,24 @@ layout(std430, binding = 4) readonly buffer Colors { vec4 color[]; };
 // Offset of the Gaussian's centre (exact_tr with tr_gradient: kernels/single/shade.cl) and its
 // cut-off radius if above 3 sigma, else zeros.
 layout(std430, binding = 6) readonly buffer Shifts { vec4 shift[]; };
+// Standard deviation of the Gaussian per axis (tr_gradient's curvature stretches it; else sigma).
+layout(std430, binding = 7) readonly buffer Axes { vec4 axes[]; };
 
 uniform mat4 view_projection;
 uniform vec3 eye;
 
 flat out vec3 center;
-flat out float gauss_sigma;
+flat out vec3 gauss_sigma;
 flat out float cutoff;  // radius of the ball the Gaussian is integrated over
 flat out vec3 factor;
 
 void main() {
   uint i = uint(gl_InstanceID);
   center = vec3(position[3u * i], position[3u * i + 1u], position[3u * i + 2u]) + shift[i].xyz;
-  gauss_sigma = sigma[i];
+  gauss_sigma = axes[i].xyz;
   factor = color[i].rgb;
   vec2 corner = vec2(gl_VertexID & 1, (gl_VertexID >> 1) & 1) * 2.0 - 1.0;
-  float radius = max(3.0 * gauss_sigma, shift[i].w);
+  float radius = max(3.0 * max(gauss_sigma.x, max(gauss_sigma.y, gauss_sigma.z)), shift[i].w);
   cutoff = radius;
   vec3 to = center - eye;
   float dist = length(to);
