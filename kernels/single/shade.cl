@@ -50,7 +50,9 @@ float3 depth_gradient(const Grid* g, __global const float* sigma_t, float3 a, fl
     c2[k] = 0.0f;
     if (ip && im) {
       s = fwd * bwd > 0.0f ? (fabs(fwd) < fabs(bwd) ? fwd : bwd) : 0.0f;
-      c2[k] = (fwd - bwd) / h;
+      // Where the slopes disagree in sign (a thin feature, an edge of the grid's medium) the
+      // parabola would be a wrong peak or trough: no curvature there.
+      if (fwd * bwd > 0.0f) c2[k] = (fwd - bwd) / h;
     } else if (ip) {
       s = fwd;
     } else if (im) {
