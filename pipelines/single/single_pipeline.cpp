@@ -111,7 +111,7 @@ Plan SinglePipeline::plan(const Scene& scene, const RenderRequest& request) {
                                  std::to_string(s.bake.samples) + " samples, " +
                                  std::to_string(s.bake.sh_bands * s.bake.sh_bands) + " SH coefficients of " +
                                  (s.bake.sh_depth ? "optical depth" : "transmittance")});
-  p.stages.push_back({"depth_peel", true, s.clip_back ? "first and second surface (clip both ends)"
+  p.stages.push_back({"depth_peel", true, s.clip_back ? "four surfaces: the medium along each ray is [1st, 2nd] and [3rd, 4th]"
                                                       : "first surface (the paper's clipping)"});
   p.stages.push_back({"shade", true, std::to_string(scene.lights.size()) +
                                          " lights evaluated once per sample, not per fragment" +
@@ -301,9 +301,14 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   CameraMatrices cam = camera_matrices(scene);
   const Vec3& eye = scene.camera.position;
   RenderTarget front(scene.width, scene.height), back(scene.width, scene.height);
+  RenderTarget third(scene.width, scene.height), fourth(scene.width, scene.height);
   const GLuint dist = distance_program_.get();
   draw_distance(dist, mesh, front, cam.view, cam.projection, eye, Vec3{}, false, 0);
-  if (s.clip_back) draw_distance(dist, mesh, back, cam.view, cam.projection, eye, Vec3{}, false, front.color_texture());
+  if (s.clip_back) {
+    draw_distance(dist, mesh, back, cam.view, cam.projection, eye, Vec3{}, false, front.color_texture());
+    draw_distance(dist, mesh, third, cam.view, cam.projection, eye, Vec3{}, false, back.color_texture());
+    draw_distance(dist, mesh, fourth, cam.view, cam.projection, eye, Vec3{}, false, third.color_texture());
+  }
   glFinish();
   clock.stop("depth_peel");
 
@@ -346,9 +351,13 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   set_camera_uniforms(splat, scene);
   uniform1i(splat, "front", 0);
   uniform1i(splat, "back", 1);
+  uniform1i(splat, "third", 2);
+  uniform1i(splat, "fourth", 3);
   uniform1i(splat, "clip_back", s.clip_back ? 1 : 0);
   glBindTextureUnit(0, front.color_texture());
   glBindTextureUnit(1, back.color_texture());
+  glBindTextureUnit(2, third.color_texture());
+  glBindTextureUnit(3, fourth.color_texture());
   out.bind_and_clear(Vec3{});  // the term alone, as the reference renders it
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
@@ -364,6 +373,8 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glDisable(GL_DEPTH_CLAMP);
   glBindTextureUnit(0, 0);
   glBindTextureUnit(1, 0);
+  glBindTextureUnit(2, 0);
+  glBindTextureUnit(3, 0);
   for (GLuint i = 0; i < 8; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
   gpu::check_gl("single splat");
   glFinish();

@@ -2,11 +2,12 @@
 // (papers/single-scattering-inhomogeneous.md). The bake (single_bake.hpp) places Gaussian samples
 // carrying spherical harmonics of their direction-dependent optical depth; it is content-addressed
 // by the voxelized medium and the bake settings, and kept in the BakeCache. A frame:
-//   depth_peel  the mesh's first and second surfaces from the eye (distance textures)
+//   depth_peel  the mesh's first four surfaces from the eye (distance textures)
 //   shade       per sample (compute shader): weight * sigma_s * psi(to eye) * sum over lights of
 //               E * psi(to light) * phase, so the fragment work does not grow with the lights
 //   splat       per sample a camera-facing quad; per fragment the Gaussian's integral along the
-//               ray between max(ball entry, first surface) and min(ball exit, second surface)
+//               ray over the ball's chord within the medium (first to second and third to fourth
+//               surface by depth peeling; the paper: from the first surface on)
 //               (erf), added into a float target
 //
 // Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 0, radius 0.5,

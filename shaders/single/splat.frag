@@ -1,8 +1,10 @@
 #version 450 core
 // Adds one sample's share of equation 3 to the pixel: factor times the integral of its Gaussian
-// w exp(-|x - b|^2 / (2 s^2)) along the view ray between x = max(ball entry, first surface) and
-// y = min(ball exit, second surface) (the second clip, by depth peeling, is optional: the paper
-// clips only against the first), in closed form with erf.
+// w exp(-|x - b|^2 / (2 s^2)) along the view ray over the part of the ball inside the medium, in
+// closed form with erf. The paper clips only at the first surface; with clip_back the ray's
+// medium is [first, second surface] and [third, fourth] (depth peeling), so that a Gaussian
+// behind the second surface adds nothing to the gap and one behind a thin part (an ear in
+// front of the head) still adds its share.
 flat in vec3 center;
 flat in vec3 gauss_sigma;  // per axis
 flat in float cutoff;
@@ -10,6 +12,8 @@ flat in vec3 factor;
 
 uniform sampler2D front;  // distance from the eye to the first surface (0 where none)
 uniform sampler2D back;   // ... to the second surface
+uniform sampler2D third;  // ... to the third (0 where none)
+uniform sampler2D fourth; // ... to the fourth
 uniform int clip_back;
 uniform vec3 eye, forward, right, up;  // right and up scaled by tan(fov / 2) (and aspect)
 uniform vec2 size;
@@ -43,14 +47,23 @@ void main() {
   float r2 = cutoff * cutoff;
   if (h2 >= r2) discard;
   float half_chord = sqrt(r2 - h2);
-  float x = max(tm - half_chord, ta);
-  float y = tm + half_chord;
+  float x = tm - half_chord, y = tm + half_chord;
+  float k = sqrt(0.5 * A);
+  // erf of the chord's ends relative to the peak, per interval of the medium.
+  float lo = max(x, ta), hi = y, span = 0.0;
   if (clip_back != 0) {
     float tb = texelFetch(back, px, 0).r;
-    if (tb > ta) y = min(y, tb);
+    if (tb > ta) hi = min(hi, tb);
+    float t3 = texelFetch(third, px, 0).r;
+    if (t3 > tb && tb > ta) {
+      float t4 = texelFetch(fourth, px, 0).r;
+      float hi2 = t4 > t3 ? min(y, t4) : y;
+      float lo2 = max(x, t3);
+      if (hi2 > lo2) span += erf_approx((hi2 - tc) * k) - erf_approx((lo2 - tc) * k);
+    }
   }
-  if (y <= x) discard;
-  float k = sqrt(0.5 * A);
-  float integral = exp(-0.5 * q) * 0.88622693 / k * (erf_approx((y - tc) * k) - erf_approx((x - tc) * k));
+  if (hi > lo) span += erf_approx((hi - tc) * k) - erf_approx((lo - tc) * k);
+  if (span <= 0.0) discard;
+  float integral = exp(-0.5 * q) * 0.88622693 / k * span;
   radiance = vec4(factor * integral, 0.0);
 }
