@@ -280,6 +280,15 @@ std::vector<float> SinglePipeline::read_shaded() const {
   return out;
 }
 
+std::pair<std::vector<float>, std::vector<float>> SinglePipeline::read_moves() const {
+  if (!shifts_ || !current_.bake) return {};
+  gpu_.gl().make_current();
+  std::vector<float> shifts(size_t(current_.bake->count) * 4), axes(shifts.size());
+  glGetNamedBufferSubData(shifts_.get(), 0, static_cast<GLsizeiptr>(shifts.size() * sizeof(float)), shifts.data());
+  glGetNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data());
+  return {shifts, axes};
+}
+
 RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& request) {
   RenderResult result;
   result.plan = plan(scene, request);

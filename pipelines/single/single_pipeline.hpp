@@ -52,6 +52,9 @@ class SinglePipeline : public Pipeline {
   const SingleBake* current() const { return current_.bake.get(); }
   // Per-sample colours of the last frame's shade pass (4 floats per sample), for tests.
   std::vector<float> read_shaded() const;
+  // Per-sample offsets of the Gaussians' centres and their standard deviations per axis, 4 floats
+  // each (exact_tr with tr_gradient), for tests.
+  std::pair<std::vector<float>, std::vector<float>> read_moves() const;
   // exact_tr: how many per-light transmittance passes ran for the current bake (tests).
   int light_passes() const { return current_.light_passes; }
 

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "../../test_util.hpp"
+#include "single_fixture.hpp"
 #include "bake/cache.hpp"
 #include "pipelines/metrics.hpp"
 #include "pipelines/reference/reference_pipeline.hpp"
@@ -21,47 +22,7 @@
 namespace scatter {
 namespace {
 
-// The homogeneous sphere of scenes/sphere.json, small enough for a unit test.
-Scene small_sphere(int size = 64, int voxels = 32) {
-  Scene s = load_scene(test::source_path("scenes/sphere.json"));
-  s.width = s.height = size;
-  s.voxels = voxels;
-  return s;
-}
-
-// The paper's path (SH of transmittance); the exact_tr tests set it to 1, the default.
-const Settings kQuick = {{"samples", 20000}, {"directions", 64}, {"exact_tr", 0}};
-
-// A homogeneous box seen over a corner, lit from behind and the side (cube-torus without the
-// torus): flat faces, edges and corners.
-Scene small_box() {
-  Scene s = load_scene(test::source_path("scenes/cube-torus.json"));
-  s.medium.density = small_sphere().medium.density;  // constant
-  s.width = s.height = 64;
-  s.voxels = 32;
-  return s;
-}
-
-// The reference marcher's single term for `s`, and the pixels its medium covers.
-struct Expected {
-  Image image;
-  std::vector<uint8_t> mask;
-};
-Expected reference_single(const Scene& s) {
-  ReferencePipeline ref(test::shared_gpu());
-  return {ref.render(s, {Terms::Single, {{"step", 0.25}}, nullptr}).image,
-          coverage_mask(s, voxelize(s, {.resolution = s.voxels}))};
-}
-
-// Sum of a's pixels over sum of b's.
-double mean_ratio(const Image& a, const Image& b) {
-  double x = 0, y = 0;
-  for (size_t i = 0; i < a.rgb.size(); ++i) {
-    x += a.rgb[i];
-    y += b.rgb[i];
-  }
-  return x / y;
-}
+using namespace single_test;
 
 // Distance from p along unit d to the exit of the box [-h, h]^3 (p inside).
 double box_exit(const Vec3& p, const Vec3& d, double h) {
@@ -219,14 +180,6 @@ TEST(SingleBake, SerializationRoundTripsAndRejectsDamage) {
   EXPECT_THROW(SingleBake::deserialize("not a bake"), std::runtime_error);
 }
 
-class SinglePipelineTest : public ::testing::Test {
- protected:
-  static SinglePipeline& pipeline() {
-    static SinglePipeline p(test::shared_gpu(), nullptr);
-    return p;
-  }
-};
-
 // The compute shader's per-sample factor against the same sum on the CPU from the baked arrays.
 TEST_F(SinglePipelineTest, ShadePassMatchesCpu) {
   Scene s = small_sphere();
@@ -299,78 +252,6 @@ TEST_F(SinglePipelineTest, MatchesReferenceOnABox) {
   Expected expected = reference_single(s);
   EXPECT_LT(relative_rmse(single, expected.image, expected.mask), 0.27);
   EXPECT_NEAR(mean_ratio(single, expected.image), 1.0, 0.1);
-}
-
-// exact_tr: the per-sample factor with optical depths summed through the voxels. On the box,
-// whose faces and edges 25 SH coefficients blur, it must be much closer to the reference (the
-// remaining error is the Gaussians'); and the two shadings of the same samples must agree on the
-// whole.
-TEST_F(SinglePipelineTest, ExactTransmittanceRemovesTheShError) {
-  Scene s = small_box();
-  Expected expected = reference_single(s);
-  Settings exact = kQuick;
-  exact["exact_tr"] = 1;
-  exact["tr_gradient"] = 0;  // the factors at the samples' centres, as the SH path's
-  Image with_sh = pipeline().render(s, {Terms::Single, kQuick, nullptr}).image;
-  std::vector<float> sh_factors = pipeline().read_shaded();
-  Image with_exact = pipeline().render(s, {Terms::Single, exact, nullptr}).image;
-  std::vector<float> exact_factors = pipeline().read_shaded();
-  double e_sh = relative_rmse(with_sh, expected.image, expected.mask);
-  double e_exact = relative_rmse(with_exact, expected.image, expected.mask);
-  EXPECT_LT(e_exact, 0.6 * e_sh) << "SH " << e_sh << ", exact " << e_exact;
-  // Both shade the same samples: their factors agree on the whole (the SH differ most where the
-  // transmittance is small, so the comparison is of sums, not ratios).
-  double diff = 0, total = 0;
-  for (size_t i = 0; i < exact_factors.size(); i += 4) {
-    diff += std::abs(sh_factors[i] - exact_factors[i]);
-    total += exact_factors[i];
-  }
-  EXPECT_GT(total, 0);
-  EXPECT_LT(diff / total, 0.25);  // measured 15 %: the SH error on this box
-}
-
-// tr_gradient: in a dense medium the transmittance falls by e within a fraction of a Gaussian,
-// so its value at the centre misjudges the Gaussian's share and the clip at the face cuts off
-// what it spread outwards. A dense box seen and lit head-on: taken at the centres, the image
-// is 0.74 of the reference's on the whole; moved and scaled by the optical depth's
-// gradient, 0.99.
-TEST_F(SinglePipelineTest, TransmittanceGradientKeepsADenseFaceItsLight) {
-  Scene s = small_box();
-  s.medium.sigma_s = {10, 10, 10};
-  s.medium.sigma_a = {0.2, 0.2, 0.2};
-  s.camera.position = {0, 0, 5};
-  s.camera.target = {0, 0, 0};
-  s.camera.fov_deg = 20;
-  s.lights = {{Light::Type::Directional, {}, Vec3{0, 0, -1}, {1, 1, 1}, 3}};
-  Expected expected = reference_single(s);
-  Settings on = {{"samples", 20000}, {"directions", 64}}, off = on;
-  off["tr_gradient"] = 0;
-  double r_off = mean_ratio(pipeline().render(s, {Terms::Single, off, nullptr}).image, expected.image);
-  double r_on = mean_ratio(pipeline().render(s, {Terms::Single, on, nullptr}).image, expected.image);
-  EXPECT_NEAR(r_on, 1.0, 0.06);
-  EXPECT_LT(r_off, 0.85);
-}
-
-// exact_tr keeps each light's transmittance while the light stays put: a camera move recomputes
-// none, moving one light of two recomputes that one, and the image matches a fresh pipeline's.
-TEST_F(SinglePipelineTest, ExactTransmittanceIsRecomputedOnlyForLightsThatMoved) {
-  Scene s = small_sphere();
-  s.lights.push_back({Light::Type::Directional, {}, normalize(Vec3{0, -1, -1}), {1, 0.5, 0.5}, 2});
-  Settings exact = kQuick;
-  exact["exact_tr"] = 1;
-  SinglePipeline p(test::shared_gpu(), nullptr);
-  p.render(s, {Terms::Single, exact, nullptr});
-  EXPECT_EQ(p.light_passes(), 2);
-  s.camera.position = {1, 0.5, 4};
-  p.render(s, {Terms::Single, exact, nullptr});
-  EXPECT_EQ(p.light_passes(), 2);
-  s.lights[0].position = {-3, 3, 3};
-  Image moved = p.render(s, {Terms::Single, exact, nullptr}).image;
-  EXPECT_EQ(p.light_passes(), 3);
-  SinglePipeline fresh(test::shared_gpu(), nullptr);
-  Image expected = fresh.render(s, {Terms::Single, exact, nullptr}).image;
-  ASSERT_EQ(moved.rgb.size(), expected.rgb.size());
-  for (size_t i = 0; i < moved.rgb.size(); ++i) ASSERT_NEAR(moved.rgb[i], expected.rgb[i], 1e-6 + 1e-5 * expected.rgb[i]);
 }
 
 // Lights add: eight copies of a light at an eighth of its intensity render the same image.
