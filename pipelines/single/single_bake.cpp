@@ -34,6 +34,7 @@ SingleBakeParams SingleBakeParams::read(SettingsReader& r) {
   p.candidates = r.integer("candidates", p.candidates, 2, 10);
   p.density_guide = r.integer("density_guide", p.density_guide ? 1 : 0, 0, 1) == 1;
   p.sigma_fit = r.integer("sigma_fit", p.sigma_fit, 0, 16);
+  p.adapt = r.number("adapt", p.adapt, 0.0, 1.0);
   p.seed = static_cast<uint32_t>(r.integer("seed", int(p.seed), 0, 1 << 30));
   // The elimination keeps ~25 neighbours per candidate: bound the candidates' memory (~1 GB).
   if (double(p.samples) * p.candidates > 2.5e6)
@@ -225,7 +226,7 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
     }
   }
 
-  // 3. Relative radius q in [0.5, 2] from rho (high rho: dense, small radius).
+  // 3. Relative radius q in [0.5, 2]^adapt from rho (high rho: dense, small radius).
   std::vector<float> medium_rho;
   for (size_t v = 0; v < voxels; ++v)
     if (g.occupancy[v] > 0) medium_rho.push_back(rho[v]);
@@ -235,7 +236,7 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   const bool constant = !(hi - lo > 1e-6 * std::max(hi, 1e-30));
   std::vector<float> q(voxels, 1.f);
   for (size_t v = 0; v < voxels; ++v)
-    if (!constant) q[v] = static_cast<float>(2.0 - 1.5 * std::clamp((rho[v] - lo) / (hi - lo), 0.0, 1.0));
+    if (!constant) q[v] = static_cast<float>(std::pow(2.0 - 1.5 * std::clamp((rho[v] - lo) / (hi - lo), 0.0, 1.0), p.adapt));
 
   // The sampled region: the medium plus a shell of `shell` voxels around it, each shell voxel
   // taking the smallest radius of its neighbours inward. Gaussians centred in the shell keep the

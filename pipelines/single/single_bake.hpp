@@ -8,7 +8,9 @@
 //   divergence rho(x) = |div T(x)| by central differences
 //   sampling   weighted Poisson-disk sampling by sample elimination, exactly `samples` points; the
 //              local radius maps rho linearly onto [r/2, 2r] (the paper's rule; robust range:
-//              5th-95th percentile of rho), a constant rho giving uniform spacing; with
+//              5th-95th percentile of rho), raised to the power `adapt` (0.5 by default: a range
+//              of [r/1.41, 1.41 r], measured better once the transmittance no longer comes from
+//              the SH; 1: the paper's), a constant rho giving uniform spacing; with
 //              density_guide, rho also grows with |grad sigma_t| inside the medium. Samples fill
 //              the medium and a thin shell outside it, so that the Gaussians sum to one right up
 //              to the surface (the render clips at the mesh)
@@ -45,6 +47,7 @@ struct SingleBakeParams {
   int candidates = 5;      // candidates per sample for the elimination
   bool density_guide = false;  // sample density also follows |grad sigma_t| inside the medium
   int sigma_fit = 4;           // passes fitting each sample's sigma_s so the splatted field matches the voxels
+  double adapt = 0.5;          // relative radius (2 - 1.5 t)^adapt from rho's rank t: 1 the paper's [r/2, 2r], 0 uniform
   uint32_t seed = 1;
   // Reads directions, samples, sh_order, sh_depth, radius, candidates, seed from `r`.
   static SingleBakeParams read(SettingsReader& r);

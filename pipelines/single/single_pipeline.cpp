@@ -17,7 +17,7 @@ namespace scatter {
 namespace {
 
 // Bump when the bake's results change, so old cache entries are not reused.
-constexpr const char* kSingleBakeVersion = "single-5";
+constexpr const char* kSingleBakeVersion = "single-6";
 
 struct SingleSettings {
   SingleBakeParams bake;
@@ -48,7 +48,7 @@ std::string_view bytes_of(const std::vector<T>& v) {
 void add_params(BakeKey& key, const SingleBakeParams& p) {
   key.add("directions", p.directions).add("samples", p.samples).add("sh_bands", p.sh_bands)
       .add("sh_depth", p.sh_depth ? 1 : 0).add("radius", p.radius).add("candidates", p.candidates).add("density_guide", p.density_guide ? 1 : 0)
-      .add("sigma_fit", p.sigma_fit).add("seed", p.seed);
+      .add("sigma_fit", p.sigma_fit).add("adapt", p.adapt).add("seed", p.seed);
 }
 
 // Exact text of a double (shortest round trip).
@@ -72,7 +72,7 @@ std::string fingerprint(const Scene& scene, const SingleBakeParams& p) {
   s += std::to_string(scene.voxels) + "|" + std::to_string(p.directions) + "|" + std::to_string(p.samples) +
        "|" + std::to_string(p.sh_bands) + "|" + std::to_string(p.sh_depth) + "|" + exact(p.radius) +
        "|" + std::to_string(p.candidates) + "|" + std::to_string(p.density_guide) + "|" + std::to_string(p.sigma_fit) +
-       "|" + std::to_string(p.seed);
+       "|" + exact(p.adapt) + "|" + std::to_string(p.seed);
   return s;
 }
 

@@ -11,7 +11,8 @@
 //               (erf), added into a float target
 //
 // Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 0, radius 0.5,
-// candidates 5, density_guide 0, sigma_fit 4, seed 1), clip_back (1): clip at the second surface (0: the paper's front-only
+// candidates 5, density_guide 0, sigma_fit 4, adapt 0.5, seed 1), clip_back (1): clip to the medium's
+// first two intervals along the ray by depth peeling (0: the paper's front-only
 // clipping), and exact_tr (1): sum each sample's optical depth to the eye (every frame) and to
 // every light (when the light appears or moves) through the voxels (kernels/single/shade.cl);
 // 0 reads them from the samples' SH, the paper's method (measured: the SH's 25 coefficients are

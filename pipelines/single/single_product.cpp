@@ -11,7 +11,7 @@ namespace {
 
 // ---- Serialisation: a flat little-endian record -----------------------------------------------
 
-constexpr uint32_t kMagic = 0x34425353;  // "SSB4"
+constexpr uint32_t kMagic = 0x35425353;  // "SSB5"
 
 class Writer {
  public:
@@ -70,6 +70,7 @@ std::string SingleBake::serialize() const {
   w.put<int32_t>(params.candidates);
   w.put<int32_t>(params.density_guide);
   w.put<int32_t>(params.sigma_fit);
+  w.put<double>(params.adapt);
   w.put<uint32_t>(params.seed);
   w.put<int32_t>(count);
   w.put<double>(coverage_mean);
@@ -101,6 +102,7 @@ SingleBake SingleBake::deserialize(const std::string& bytes) {
   b.params.candidates = r.get<int32_t>();
   b.params.density_guide = r.get<int32_t>() != 0;
   b.params.sigma_fit = r.get<int32_t>();
+  b.params.adapt = r.get<double>();
   b.params.seed = r.get<uint32_t>();
   b.count = r.get<int32_t>();
   if (b.count < 0 || b.params.sh_bands < 1 || b.params.sh_bands > kMaxShBands)
