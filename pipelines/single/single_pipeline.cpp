@@ -117,7 +117,11 @@ Plan SinglePipeline::plan(const Scene& scene, const RenderRequest& request) {
                                          " lights evaluated once per sample, not per fragment" +
                                          (s.exact_tr ? ": exact optical depths through the voxels (exact_tr)"
                                                      : ": transmittance from the samples' SH")});
-  p.stages.push_back({"splat", true, "one Gaussian per sample integrated along each view ray (erf)"});
+  const bool model = s.exact_tr && s.tr_gradient;
+  p.stages.push_back({"splat", true, std::string("one Gaussian per sample integrated along each view ray (erf)") +
+                                         (model ? (s.tr_hessian ? ", moved and stretched by the optical depth's gradient and curvature"
+                                                                : ", moved by the optical depth's gradient")
+                                                : "")});
   if (scene.medium.ior != 1.0)
     p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " +
                                                std::to_string(scene.medium.ior) + ")"});
