@@ -197,17 +197,22 @@ void SinglePipeline::upload() {
   colors_ = gpu::GlObject::create(gpu::GlKind::Buffer);
   glNamedBufferStorage(colors_.get(), static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
                        GL_MAP_READ_BIT | GL_DYNAMIC_STORAGE_BIT);
-  shifts_ = gpu::GlObject::create(gpu::GlKind::Buffer);
-  const std::vector<float> zero(size_t(std::max(b.count, 1)) * 4, 0.f);
-  glNamedBufferStorage(shifts_.get(), static_cast<GLsizeiptr>(zero.size() * sizeof(float)), zero.data(),
-                       GL_DYNAMIC_STORAGE_BIT);
-  // Per-axis standard deviations (the SH path's: each sample's own sigma).
+  for (gpu::GlObject* buffer : {&shifts_, &axes_}) {
+    *buffer = gpu::GlObject::create(gpu::GlKind::Buffer);
+    glNamedBufferStorage(buffer->get(), static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
+                         GL_DYNAMIC_STORAGE_BIT);
+  }
+  reset_moves();
+  current_.uploaded = true;
+}
+
+void SinglePipeline::reset_moves() {
+  const SingleBake& b = *current_.bake;
+  glClearNamedBufferData(shifts_.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
   std::vector<float> axes(size_t(std::max(b.count, 1)) * 4, 0.f);
   for (int i = 0; i < b.count; ++i) std::fill_n(&axes[4 * size_t(i)], 4, b.sigma[i]);
-  axes_ = gpu::GlObject::create(gpu::GlKind::Buffer);
-  glNamedBufferStorage(axes_.get(), static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data(),
-                       GL_DYNAMIC_STORAGE_BIT);
-  current_.uploaded = true;
+  glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data());
+  current_.moved = false;
 }
 
 void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian, double max_gs) {
@@ -328,14 +333,10 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   const GLuint shade = shade_program_.get();
   if (s.exact_tr) {
     shade_exact(scene, s.tr_gradient, s.tr_hessian, s.tr_gradient_max);
+    current_.moved = true;
   } else if (current_.moved) {
-    // The SH path moves and stretches nothing: back to the samples' own Gaussians.
-    glClearNamedBufferData(shifts_.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
-    std::vector<float> axes(size_t(std::max(b.count, 1)) * 4, 0.f);
-    for (int i = 0; i < b.count; ++i) std::fill_n(&axes[4 * size_t(i)], 4, b.sigma[i]);
-    glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data());
+    reset_moves();  // the SH path moves and stretches nothing
   }
-  current_.moved = s.exact_tr;
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, positions_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, weights_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, sigma_s_.get());

@@ -74,6 +74,8 @@ class SinglePipeline : public Pipeline {
     bool moved = false;                           // shifts_ / axes_ hold exact_tr's last values
   };
   void upload();
+  // The samples' own Gaussians in shifts_ (no move) and axes_ (sigma on every axis).
+  void reset_moves();
   // exact_tr: the per-sample factors by kernels/single/shade.cl, written into colors_.
   // With `gradient`, also each Gaussian's offset into shifts_ (kernels/single/shade.cl).
   void shade_exact(const Scene& scene, bool gradient, bool hessian, double max_gs);
