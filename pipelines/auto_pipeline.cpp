@@ -4,11 +4,13 @@ namespace scatter {
 
 std::pair<std::string, std::string> AutoPipeline::choose(const Scene& scene, Terms terms) {
   if (!scene.medium.density->homogeneous())
-    return {"reference", "inhomogeneous medium: only the reference renders it so far"};
+    return {"reference", "inhomogeneous medium: the reference is exact; single (baked, 3-7 % off on the "
+                         "benchmark scenes), psf and lbl render it faster when asked for"};
   if (scene.medium.ior != 1.0)
     return {"reference", "a dielectric boundary (ior != 1): thickness neglects Fresnel and refraction"};
   if (terms != Terms::Single)
-    return {"reference", "the " + to_string(terms) + " term: only the reference renders it so far"};
+    return {"reference", "the " + to_string(terms) + " term: the reference; lbl and psf render it faster "
+                                                     "but further from it (docs/BENCHMARKS.md)"};
   Aabb b = scene.mesh.bounds();
   for (const Light& l : scene.lights)
     if (l.type != Light::Type::Directional && length(l.position - b.center()) <= length(b.size()) / 2 * 1.05)
