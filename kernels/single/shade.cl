@@ -12,7 +12,9 @@
 // s. A Gaussian times that exponential is the Gaussian moved by -g s^2 and scaled by
 // exp(-g . (b - a) + |g|^2 s^2 / 2): the splat then integrates T along the view ray instead of
 // taking it at the centre, which near a face (where single scattering is strongest) the centre
-// value overestimates on one side and the clip at the surface cuts off the other.
+// value overestimates on one side and the clip at the surface cuts off the other. With `hessian`
+// the model adds 1/2 sum_k c_k (x_k - a_k)^2 (second differences): the Gaussian is also
+// stretched or narrowed per axis (shift[i], axes[i]; see shade_exact).
 
 // Optical depth of the channel mean from o towards d over [0, t1].
 float mean_depth(const Grid* g, __global const float* sigma_t, float3 o, float3 d, float t1) {
