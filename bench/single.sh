@@ -44,16 +44,8 @@ for v in 64 128; do
     > "$out/single-bake-v$v.json"
 done
 
-# Frame time: 1 and 8 lights (bench/thickness.sh writes sphere-8lights.json; made here as well).
-python3 - "$out" <<'PY'
-import json, sys, math
-out = sys.argv[1]
-scene = json.load(open("scenes/sphere.json"))
-light = scene["lights"][0]
-scene["lights"] = [dict(light, position=[3 * math.cos(2 * math.pi * k / 8), 2.0, 3 * math.sin(2 * math.pi * k / 8)],
-                        intensity=light["intensity"] / 8) for k in range(8)]
-json.dump(scene, open(f"{out}/sphere-8lights.json", "w"))
-PY
+# Frame time: 1 and 8 lights.
+python3 bench/sphere-8lights.py "$out"
 $S bench scenes/sphere.json --pipeline single --terms single "${base[@]}" --sweep exact_tr=0,1 --frames 9 \
   --csv "$out/single-512-1light.csv"
 $S bench "$out/sphere-8lights.json" --pipeline single --terms single "${base[@]}" --sweep exact_tr=0,1 --frames 9 \

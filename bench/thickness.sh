@@ -12,18 +12,7 @@ for v in 64 128 256; do
   build/scatterd bench "$out/sphere-v$v.json" --pipeline thickness --terms single --width 128 \
     --height 128 --sweep steps=8,32 --csv "$out/thickness-sphere-v$v.csv"
 done
-python3 - "$out" <<'PY'
-import json, sys, math
-out = sys.argv[1]
-scene = json.load(open("scenes/sphere.json"))
-light = scene["lights"][0]
-lights = []
-for k in range(8):
-    a = 2 * math.pi * k / 8
-    lights.append(dict(light, position=[3 * math.cos(a), 2.0, 3 * math.sin(a)], intensity=light["intensity"] / 8))
-scene["lights"] = lights
-json.dump(scene, open(f"{out}/sphere-8lights.json", "w"))
-PY
+python3 bench/sphere-8lights.py "$out"
 build/scatterd bench scenes/sphere.json --pipeline thickness --terms single --sweep steps=32 \
   --frames 7 --csv "$out/thickness-512-1light.csv"
 build/scatterd bench "$out/sphere-8lights.json" --pipeline thickness --terms single --sweep steps=32 \
