@@ -117,6 +117,8 @@ std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu, 
 
 // v with 3 significant digits, for plan reasons ("0.05", "1e+03").
 std::string short_number(double v);
+// v's shortest text that reads back to the same double, for keys.
+std::string exact_number(double v);
 
 // Throws ValidationError unless `pipeline` supports `terms`.
 void require_terms(const Pipeline& pipeline, Terms terms);

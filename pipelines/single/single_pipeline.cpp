@@ -2,7 +2,6 @@
 
 #include <spdlog/spdlog.h>
 
-#include <charconv>
 #include <functional>
 #include <map>
 #include <string_view>
@@ -51,13 +50,6 @@ void add_params(BakeKey& key, const SingleBakeParams& p) {
       .add("sigma_fit", p.sigma_fit).add("adapt", p.adapt).add("seed", p.seed);
 }
 
-// Exact text of a double (shortest round trip).
-std::string exact(double v) {
-  char buf[32];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
 // Cheap identity of what the bake depends on, to skip even the voxelization when a live session
 // renders the same asset again: mesh bytes, the density object (held by Current, so its address
 // cannot be reused by another while compared), the medium and the resolution.
@@ -68,11 +60,11 @@ std::string fingerprint(const Scene& scene, const SingleBakeParams& p) {
   h(bytes_of(scene.mesh.indices));
   s += std::to_string(reinterpret_cast<uintptr_t>(scene.medium.density.get())) + "|";
   for (const Vec3* v : {&scene.medium.sigma_s, &scene.medium.sigma_a})
-    for (int c = 0; c < 3; ++c) s += exact((*v)[c]) + ",";
+    for (int c = 0; c < 3; ++c) s += exact_number((*v)[c]) + ",";
   s += std::to_string(scene.voxels) + "|" + std::to_string(p.directions) + "|" + std::to_string(p.samples) +
-       "|" + std::to_string(p.sh_bands) + "|" + std::to_string(p.sh_depth) + "|" + exact(p.radius) +
+       "|" + std::to_string(p.sh_bands) + "|" + std::to_string(p.sh_depth) + "|" + exact_number(p.radius) +
        "|" + std::to_string(p.candidates) + "|" + std::to_string(p.density_guide) + "|" + std::to_string(p.sigma_fit) +
-       "|" + exact(p.adapt) + "|" + std::to_string(p.seed);
+       "|" + exact_number(p.adapt) + "|" + std::to_string(p.seed);
   return s;
 }
 
@@ -111,17 +103,18 @@ Plan SinglePipeline::plan(const Scene& scene, const RenderRequest& request) {
                                  std::to_string(s.bake.samples) + " samples, " +
                                  std::to_string(s.bake.sh_bands * s.bake.sh_bands) + " SH coefficients of " +
                                  (s.bake.sh_depth ? "optical depth" : "transmittance")});
-  p.stages.push_back({"depth_peel", true, s.clip_back ? "four surfaces: the medium along each ray is [1st, 2nd] and [3rd, 4th]"
-                                                      : "first surface (the paper's clipping)"});
+  p.stages.push_back({"depth_peel", true,
+                      s.clip_back ? "four surfaces: the medium along each ray is [1st, 2nd] and [3rd, 4th]"
+                                  : "first surface (the paper's clipping)"});
   p.stages.push_back({"shade", true, std::to_string(scene.lights.size()) +
                                          " lights evaluated once per sample, not per fragment" +
                                          (s.exact_tr ? ": exact optical depths through the voxels (exact_tr)"
                                                      : ": transmittance from the samples' SH")});
-  const bool model = s.exact_tr && s.tr_gradient;
-  p.stages.push_back({"splat", true, std::string("one Gaussian per sample integrated along each view ray (erf)") +
-                                         (model ? (s.tr_hessian ? ", moved and stretched by the optical depth's gradient and curvature"
-                                                                : ", moved by the optical depth's gradient")
-                                                : "")});
+  std::string moved;
+  if (s.exact_tr && s.tr_gradient)
+    moved = s.tr_hessian ? ", moved and stretched by the optical depth's gradient and curvature"
+                         : ", moved by the optical depth's gradient";
+  p.stages.push_back({"splat", true, "one Gaussian per sample integrated along each view ray (erf)" + moved});
   if (scene.medium.ior != 1.0)
     p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " +
                                                std::to_string(scene.medium.ior) + ")"});
@@ -213,72 +206,6 @@ void SinglePipeline::reset_moves() {
   for (int i = 0; i < b.count; ++i) std::fill_n(&axes[4 * size_t(i)], 4, b.sigma[i]);
   glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data());
   current_.moved = false;
-}
-
-void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian, double max_gs) {
-  const SingleBake& b = *current_.bake;
-  const VoxelGrid& g = *current_.grid;
-  gpu::ClContext& cl = gpu_.cl();
-  if (!current_.cl_uploaded) {
-    std::vector<float> st(g.sigma_s.size());
-    for (size_t i = 0; i < st.size(); ++i) st[i] = g.sigma_s[i] + g.sigma_a[i];
-    cl_sigma_t_ = scatter::upload(cl, st);
-    cl_at_ = scatter::upload(cl, b.depth_at);
-    cl_position_ = scatter::upload(cl, b.position);
-    cl_sigma_ = scatter::upload(cl, b.sigma);
-    cl_weight_ = scatter::upload(cl, b.weight);
-    cl_sigma_s_ = scatter::upload(cl, b.sigma_s);
-    cl_out_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
-    cl_shift_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
-    cl_axes_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
-    current_.cl_uploaded = true;
-  }
-  const std::vector<std::string> program = {"kernels/reference/common.cl", "kernels/single/shade.cl"};
-  cl::Buffer lights = scatter::upload(cl, pack_lights(scene.lights));
-  cl_float3 origin{{float(g.origin.x), float(g.origin.y), float(g.origin.z)}};
-  const size_t block = size_t(std::max(b.count, 1)) * 3 * sizeof(float);
-  // Transmittance to each light, kept while the light stays where it is (its position, or its
-  // direction for a directional light, is the key).
-  std::map<std::string, std::pair<cl::Buffer, cl::Buffer>> still_used;
-  cl::Buffer all(cl.context(), CL_MEM_READ_WRITE, block * std::max<size_t>(scene.lights.size(), 1));
-  cl::Buffer all_grad(cl.context(), CL_MEM_READ_WRITE, 2 * block * std::max<size_t>(scene.lights.size(), 1));
-  cl::Kernel per_light(cl.program(program), "light_transmittance");
-  for (size_t l = 0; l < scene.lights.size(); ++l) {
-    const Light& light = scene.lights[l];
-    const Vec3& where = light.type == Light::Type::Directional ? light.direction : light.position;
-    std::string key = std::to_string(int(light.type)) + ":" + exact(where.x) + "," + exact(where.y) + "," +
-                      exact(where.z) + (gradient ? ":g" : "");
-    auto found = current_.light_tr.find(key);
-    std::pair<cl::Buffer, cl::Buffer> tr;
-    if (found != current_.light_tr.end()) {
-      tr = found->second;
-    } else {
-      tr = {cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block), cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 2 * block)};
-      gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_sigma_, b.count,
-                    lights, static_cast<int>(l), gradient ? 1 : 0, tr.first, tr.second);
-      cl.queue().enqueueNDRangeKernel(per_light, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
-      ++current_.light_passes;
-    }
-    cl.queue().enqueueCopyBuffer(tr.first, all, 0, l * block, block);
-    if (gradient) cl.queue().enqueueCopyBuffer(tr.second, all_grad, 0, 2 * l * block, 2 * block);
-    still_used[key] = tr;
-  }
-  current_.light_tr = std::move(still_used);
-  cl::Kernel k(cl.program(program), "shade_exact");
-  const Vec3& e = scene.camera.position;
-  cl_float3 eye{{float(e.x), float(e.y), float(e.z)}};
-  gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_,
-                cl_sigma_s_, b.count, lights, static_cast<int>(scene.lights.size()), all, all_grad, gradient ? 1 : 0,
-                hessian ? 1 : 0, float(max_gs), float(scene.medium.g), eye, cl_out_, cl_shift_, cl_axes_);
-  cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
-  std::vector<float> out(size_t(b.count) * 4), shift(size_t(b.count) * 4), axes(size_t(b.count) * 4);
-  cl.queue().enqueueReadBuffer(cl_out_, CL_TRUE, 0, out.size() * sizeof(float), out.data());
-  cl.queue().enqueueReadBuffer(cl_shift_, CL_TRUE, 0, shift.size() * sizeof(float), shift.data());
-  cl.queue().enqueueReadBuffer(cl_axes_, CL_TRUE, 0, axes.size() * sizeof(float), axes.data());
-  gpu_.gl().make_current();
-  glNamedBufferSubData(colors_.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(float)), out.data());
-  glNamedBufferSubData(shifts_.get(), 0, static_cast<GLsizeiptr>(shift.size() * sizeof(float)), shift.data());
-  glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data());
 }
 
 std::vector<float> SinglePipeline::read_shaded() const {
