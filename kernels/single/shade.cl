@@ -41,11 +41,13 @@ float depth_to(const Grid* g, __global const float* sigma_t, float3 p, float3 ta
 // does not make a steep slope out of one side). *curv: the second differences where both sides
 // are inside (else zero).
 float3 depth_gradient(const Grid* g, __global const float* sigma_t, float3 a, float tau0, float3 target,
-                      int directional, float h, float3* curv) {
+                      int directional, float h, float4 plane, float3* curv) {
   float out[3], c2[3];
   for (int k = 0; k < 3; ++k) {
     float3 e = (float3)(k == 0 ? h : 0.0f, k == 1 ? h : 0.0f, k == 2 ? h : 0.0f);
-    bool ip = in_medium(g, sigma_t, a + e), im = in_medium(g, sigma_t, a - e);
+    // A piece split at a jump (plane: its side is n . x <= d) differences on its side only.
+    bool ip = in_medium(g, sigma_t, a + e) && dot(plane.xyz, a + e) <= plane.w;
+    bool im = in_medium(g, sigma_t, a - e) && dot(plane.xyz, a - e) <= plane.w;
     float fwd = ip ? (depth_to(g, sigma_t, a + e, target, directional) - tau0) / h : 0.0f;
     float bwd = im ? (tau0 - depth_to(g, sigma_t, a - e, target, directional)) / h : 0.0f;
     float s = 0.0f;
@@ -70,7 +72,8 @@ float3 depth_gradient(const Grid* g, __global const float* sigma_t, float3 a, fl
 // grad[3 i ..]: the gradient of its channel-mean optical depth.
 __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, int nz,
                                   __global const float* sigma_t, __global const float* at,
-                                  __global const float* sigma, int count, __global const float* lights, int light,
+                                  __global const float* sigma, __global const float* planes, int count,
+                                  __global const float* lights, int light,
                                   int gradient, __global float* out, __global float* grad) {
   int i = get_global_id(0);
   if (i >= count) return;
@@ -90,7 +93,7 @@ __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, in
   int directional = L.type == 1;
   float3 curv;
   float3 g = depth_gradient(&grid, sigma_t, b, mean, directional ? -L.direction : L.position, directional, sigma[i],
-                            &curv);
+                            vload4(i, planes), &curv);
   vstore3(g, 2 * i, grad);
   vstore3(curv, 2 * i + 1, grad);
 }
@@ -99,7 +102,8 @@ __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, in
 // read with `gradient`). out[i]: the factor; shift[i]: the offset of the Gaussian's centre.
 __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __global const float* sigma_t,
                           __global const float* at, __global const float* position, __global const float* sigma,
-                          __global const float* weight, __global const float* sigma_s, int count,
+                          __global const float* weight, __global const float* sigma_s, __global const float* planes,
+                          int count,
                           __global const float* lights, int light_count, __global const float* light_tr,
                           __global const float* light_grad, int gradient, int hessian, float max_gs, float g_phase, float3 eye,
                           __global float4* out, __global float4* shift, __global float4* axes) {
@@ -140,7 +144,7 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   float3 axis = (float3)(s);
   if (gradient) {
     float3 curv;
-    float3 g = depth_gradient(&grid, sigma_t, b, view_mean, eye, 0, s, &curv);
+    float3 g = depth_gradient(&grid, sigma_t, b, view_mean, eye, 0, s, vload4(i, planes), &curv);
     if (light_w > 0.0f) {
       g += light_g / light_w;
       curv += light_c / light_w;

@@ -33,7 +33,10 @@ SingleBakeParams SingleBakeParams::read(SettingsReader& r) {
   p.radius = r.number("radius", p.radius, 0.2, 2.0);
   p.candidates = r.integer("candidates", p.candidates, 2, 10);
   p.density_guide = r.integer("density_guide", p.density_guide ? 1 : 0, 0, 1) == 1;
+  p.weight_fit = r.integer("weight_fit", p.weight_fit, 0, 200);
   p.sigma_fit = r.integer("sigma_fit", p.sigma_fit, 0, 16);
+  p.split = r.number("split", p.split, 0.0, 1000.0);
+  if (p.split > 0 && p.split < 1.5) throw ValidationError("settings.split", "split must be 0 (off) or at least 1.5");
   p.adapt = r.number("adapt", p.adapt, 0.0, 1.0);
   p.seed = static_cast<uint32_t>(r.integer("seed", int(p.seed), 0, 1 << 30));
   // The elimination keeps ~25 neighbours per candidate: bound the candidates' memory (~1 GB).
@@ -164,6 +167,7 @@ double gaussian_sum(const SingleBake& b, const Vec3& p) {
     Vec3 c{b.position[3 * i], b.position[3 * i + 1], b.position[3 * i + 2]};
     double sg = b.sigma[i], r2 = dot(p - c, p - c);
     if (r2 > kCutoff * kCutoff * sg * sg) continue;
+    if (!b.plane.empty() && dot(Vec3{b.plane[4 * i], b.plane[4 * i + 1], b.plane[4 * i + 2]}, p) > b.plane[4 * i + 3]) continue;
     s += b.weight[i] * std::exp(-r2 / (2 * sg * sg));
   }
   return s;

@@ -15,8 +15,12 @@
 //              the medium and a thin shell outside it, so that the Gaussians sum to one right up
 //              to the surface (the render clips at the mesh)
 //   gaussians  standard deviation `radius` x the local spacing, cut off at 3 sigma; weights
-//              rescaled (4 passes) so the Gaussians sum to one at the voxel centres inside; each
-//              sample's sigma_s is the Gaussian-weighted mean of the medium around it
+//              rescaled (4 passes) so the Gaussians sum to one at the voxel centres inside, then
+//              `weight_fit` (20) least-squares iterations (CGLS) towards the same; a sample whose
+//              Gaussian crosses a jump in the extinction (ratio above `split`, 2; 0 never) becomes
+//              two pieces clipped by the interface plane (single_split.cpp); each sample's (piece's)
+//              sigma_s is the Gaussian-weighted mean of the medium around it on its side, then
+//              `sigma_fit` (8) passes fit the splatted field to the voxels
 //   sh         exact optical depth per channel from every sample along every direction (DDA),
 //              projected onto `sh_bands`^2 real spherical harmonics: of exp(-tau) (the paper, the
 //              default) or of tau itself, clamped to 20, exponentiated when rendering (`sh_depth`
@@ -46,7 +50,9 @@ struct SingleBakeParams {
   double radius = 0.5;     // Gaussian sigma / local spacing
   int candidates = 5;      // candidates per sample for the elimination
   bool density_guide = false;  // sample density also follows |grad sigma_t| inside the medium
-  int sigma_fit = 4;           // passes fitting each sample's sigma_s so the splatted field matches the voxels
+  int weight_fit = 20;         // least-squares (CGLS) iterations refining the weights after the passes
+  double split = 2;            // extinction ratio above which a Gaussian is split at the jump (0: never)
+  int sigma_fit = 8;           // passes fitting each sample's sigma_s so the splatted field matches the voxels
   double adapt = 0.5;          // relative radius (2 - 1.5 t)^adapt from rho's rank t: 1 the paper's [r/2, 2r], 0 uniform
   uint32_t seed = 1;
   // Reads directions, samples, sh_order, sh_depth, radius, candidates, seed from `r`.
@@ -62,6 +68,8 @@ struct SingleBake {
   std::vector<float> sigma;     // Gaussian standard deviation per sample
   std::vector<float> weight;    // Gaussian amplitude per sample
   std::vector<float> sigma_s;   // 3 per sample
+  std::vector<float> plane;     // 4 per sample: it counts where n . x <= d (xyz n, w d); zeros: everywhere
+  int split = 0;                // samples split in two at a jump (count includes the extra pieces)
   std::vector<float> sh;        // per sample, per channel, sh_bands^2 coefficients
   // Sum of the Gaussians at the voxel centres inside: mean and relative standard deviation.
   double coverage_mean = 0, coverage_spread = 0;

@@ -16,7 +16,7 @@ namespace scatter {
 namespace {
 
 // Bump when the bake's results change, so old cache entries are not reused.
-constexpr const char* kSingleBakeVersion = "single-6";
+constexpr const char* kSingleBakeVersion = "single-7";
 
 struct SingleSettings {
   SingleBakeParams bake;
@@ -47,7 +47,7 @@ std::string_view bytes_of(const std::vector<T>& v) {
 void add_params(BakeKey& key, const SingleBakeParams& p) {
   key.add("directions", p.directions).add("samples", p.samples).add("sh_bands", p.sh_bands)
       .add("sh_depth", p.sh_depth ? 1 : 0).add("radius", p.radius).add("candidates", p.candidates).add("density_guide", p.density_guide ? 1 : 0)
-      .add("sigma_fit", p.sigma_fit).add("adapt", p.adapt).add("seed", p.seed);
+      .add("weight_fit", p.weight_fit).add("split", p.split).add("sigma_fit", p.sigma_fit).add("adapt", p.adapt).add("seed", p.seed);
 }
 
 // Cheap identity of what the bake depends on, to skip even the voxelization when a live session
@@ -63,7 +63,7 @@ std::string fingerprint(const Scene& scene, const SingleBakeParams& p) {
     for (int c = 0; c < 3; ++c) s += exact_number((*v)[c]) + ",";
   s += std::to_string(scene.voxels) + "|" + std::to_string(p.directions) + "|" + std::to_string(p.samples) +
        "|" + std::to_string(p.sh_bands) + "|" + std::to_string(p.sh_depth) + "|" + exact_number(p.radius) +
-       "|" + std::to_string(p.candidates) + "|" + std::to_string(p.density_guide) + "|" + std::to_string(p.sigma_fit) +
+       "|" + std::to_string(p.candidates) + "|" + std::to_string(p.density_guide) + "|" + std::to_string(p.sigma_fit) + "|" + std::to_string(p.weight_fit) + "|" + exact_number(p.split) +
        "|" + exact_number(p.adapt) + "|" + std::to_string(p.seed);
   return s;
 }
@@ -169,14 +169,16 @@ BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request
   const SingleBake& b = *current_.bake;
   r.key = current_.key;
   r.bake_timings = b.timings;
-  r.stats = {{"samples", b.count},
+  r.stats = {{"samples", b.count - b.split},
+             {"pieces", b.count},
+             {"split", b.split},
              {"directions", b.params.directions},
              {"sh_coefficients", b.coefficients()},
              {"sh_of", b.params.sh_depth ? "optical depth" : "transmittance"},
              {"coverage_mean", b.coverage_mean},
              {"coverage_spread", b.coverage_spread},
              {"bytes", b.position.size() * 4 + b.sigma.size() * 4 + b.weight.size() * 4 +
-                           b.sigma_s.size() * 4 + b.sh.size() * 4}};
+                           b.sigma_s.size() * 4 + b.plane.size() * 4 + b.sh.size() * 4}};
   return r;
 }
 
@@ -187,6 +189,7 @@ void SinglePipeline::upload() {
   sigma_s_ = storage(b.sigma_s);
   sh_ = storage(b.sh);
   sigmas_ = storage(b.sigma);
+  planes_ = storage(b.plane.empty() ? std::vector<float>(size_t(std::max(b.count, 1)) * 4, 0.f) : b.plane);
   colors_ = gpu::GlObject::create(gpu::GlKind::Buffer);
   glNamedBufferStorage(colors_.get(), static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
                        GL_MAP_READ_BIT | GL_DYNAMIC_STORAGE_BIT);
@@ -272,6 +275,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, sigmas_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, shifts_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, axes_.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 8, planes_.get());
   uniform1i(shade, "count", b.count);
   uniform1i(shade, "bands", b.params.sh_bands);
   uniform1i(shade, "depth_mode", b.params.sh_depth ? 1 : 0);

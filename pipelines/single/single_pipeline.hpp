@@ -11,7 +11,7 @@
 //               (erf), added into a float target
 //
 // Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 0, radius 0.5,
-// candidates 5, density_guide 0, sigma_fit 4, adapt 0.5, seed 1), clip_back (1): clip to the medium's
+// candidates 5, density_guide 0, weight_fit 20, split 2, sigma_fit 8, adapt 0.5, seed 1), clip_back (1): clip to the medium's
 // first two intervals along the ray by depth peeling (0: the paper's front-only
 // clipping), and exact_tr (1): sum each sample's optical depth to the eye (every frame) and to
 // every light (when the light appears or moves) through the voxels (kernels/single/shade.cl);
@@ -85,8 +85,8 @@ class SinglePipeline : public Pipeline {
   std::unique_ptr<BakeCache> own_cache_;
   Current current_;
   gpu::GlObject distance_program_, shade_program_, splat_program_, empty_vao_;
-  gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_;
-  cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_sigma_s_, cl_out_, cl_shift_, cl_axes_;
+  gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_, planes_;
+  cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_sigma_s_, cl_plane_, cl_out_, cl_shift_, cl_axes_;
 };
 
 }  // namespace scatter

@@ -11,7 +11,7 @@ namespace {
 
 // ---- Serialisation: a flat little-endian record -----------------------------------------------
 
-constexpr uint32_t kMagic = 0x35425353;  // "SSB5"
+constexpr uint32_t kMagic = 0x36425353;  // "SSB6"
 
 class Writer {
  public:
@@ -70,9 +70,12 @@ std::string SingleBake::serialize() const {
   w.put<int32_t>(params.candidates);
   w.put<int32_t>(params.density_guide);
   w.put<int32_t>(params.sigma_fit);
+  w.put<int32_t>(params.weight_fit);
+  w.put<double>(params.split);
   w.put<double>(params.adapt);
   w.put<uint32_t>(params.seed);
   w.put<int32_t>(count);
+  w.put<int32_t>(split);
   w.put<double>(coverage_mean);
   w.put<double>(coverage_spread);
   w.put_floats(position);
@@ -80,6 +83,7 @@ std::string SingleBake::serialize() const {
   w.put_floats(sigma);
   w.put_floats(weight);
   w.put_floats(sigma_s);
+  w.put_floats(plane);
   w.put_floats(sh);
   w.put<uint32_t>(static_cast<uint32_t>(timings.size()));
   for (const StageTime& t : timings) {
@@ -102,9 +106,12 @@ SingleBake SingleBake::deserialize(const std::string& bytes) {
   b.params.candidates = r.get<int32_t>();
   b.params.density_guide = r.get<int32_t>() != 0;
   b.params.sigma_fit = r.get<int32_t>();
+  b.params.weight_fit = r.get<int32_t>();
+  b.params.split = r.get<double>();
   b.params.adapt = r.get<double>();
   b.params.seed = r.get<uint32_t>();
   b.count = r.get<int32_t>();
+  b.split = r.get<int32_t>();
   if (b.count < 0 || b.params.sh_bands < 1 || b.params.sh_bands > kMaxShBands)
     throw std::runtime_error("single bake: bad header");
   b.coverage_mean = r.get<double>();
@@ -115,6 +122,7 @@ SingleBake SingleBake::deserialize(const std::string& bytes) {
   b.sigma = r.get_floats(n);
   b.weight = r.get_floats(n);
   b.sigma_s = r.get_floats(3 * n);
+  b.plane = r.get_floats(4 * n);
   b.sh = r.get_floats(3 * n * b.coefficients());
   uint32_t stages = r.get<uint32_t>();
   if (stages > 64) throw std::runtime_error("single bake: bad stage list");

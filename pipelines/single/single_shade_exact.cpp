@@ -21,6 +21,7 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
     cl_sigma_ = scatter::upload(cl, b.sigma);
     cl_weight_ = scatter::upload(cl, b.weight);
     cl_sigma_s_ = scatter::upload(cl, b.sigma_s);
+    cl_plane_ = scatter::upload(cl, b.plane.empty() ? std::vector<float>(size_t(std::max(b.count, 1)) * 4, 0.f) : b.plane);
     cl_out_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     cl_shift_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     cl_axes_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
@@ -47,8 +48,8 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
       tr = found->second;
     } else {
       tr = {cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block), cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 2 * block)};
-      gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_sigma_, b.count,
-                    lights, static_cast<int>(l), gradient ? 1 : 0, tr.first, tr.second);
+      gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_sigma_, cl_plane_,
+                    b.count, lights, static_cast<int>(l), gradient ? 1 : 0, tr.first, tr.second);
       cl.queue().enqueueNDRangeKernel(per_light, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
       ++current_.light_passes;
     }
@@ -61,7 +62,7 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
   const Vec3& e = scene.camera.position;
   cl_float3 eye{{float(e.x), float(e.y), float(e.z)}};
   gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_,
-                cl_sigma_s_, b.count, lights, static_cast<int>(scene.lights.size()), all, all_grad, gradient ? 1 : 0,
+                cl_sigma_s_, cl_plane_, b.count, lights, static_cast<int>(scene.lights.size()), all, all_grad, gradient ? 1 : 0,
                 hessian ? 1 : 0, float(max_gs), float(scene.medium.g), eye, cl_out_, cl_shift_, cl_axes_);
   cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
   std::vector<float> out(size_t(b.count) * 4), shift(size_t(b.count) * 4), axes(size_t(b.count) * 4);

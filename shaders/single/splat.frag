@@ -9,6 +9,7 @@ flat in vec3 center;
 flat in vec3 gauss_sigma;  // per axis
 flat in float cutoff;
 flat in vec3 factor;
+flat in vec4 clip_plane;  // the piece's side: n . x <= d (zeros: everywhere)
 
 uniform sampler2D front;  // distance from the eye to the first surface (0 where none)
 uniform sampler2D back;   // ... to the second surface
@@ -50,6 +51,11 @@ void main() {
   float x = tm - half_chord, y = tm + half_chord;
   float k = sqrt(0.5 * A);
   // erf of the chord's ends relative to the peak, per interval of the medium.
+  // A piece's plane clips the chord to its side: eye + t d with n . (eye + t d) <= w.
+  float nd = dot(clip_plane.xyz, d), ne = clip_plane.w - dot(clip_plane.xyz, eye);
+  if (nd > 0.0) y = min(y, ne / nd);
+  else if (nd < 0.0) x = max(x, ne / nd);
+  else if (ne < 0.0) discard;
   float lo = max(x, ta), hi = y, span = 0.0;
   if (clip_back != 0) {
     float tb = texelFetch(back, px, 0).r;

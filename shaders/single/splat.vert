@@ -10,6 +10,9 @@ layout(std430, binding = 6) readonly buffer Shifts { vec4 shift[]; };
 // Standard deviation of the Gaussian per axis (tr_gradient's curvature stretches it; else sigma).
 layout(std430, binding = 7) readonly buffer Axes { vec4 axes[]; };
 
+// A piece split at an extinction jump counts only where n . x <= d (xyz n, w d; zeros: everywhere).
+layout(std430, binding = 8) readonly buffer Planes { vec4 plane[]; };
+
 uniform mat4 view_projection;
 uniform vec3 eye;
 
@@ -17,12 +20,14 @@ flat out vec3 center;
 flat out vec3 gauss_sigma;
 flat out float cutoff;  // radius of the ball the Gaussian is integrated over
 flat out vec3 factor;
+flat out vec4 clip_plane;
 
 void main() {
   uint i = uint(gl_InstanceID);
   center = vec3(position[3u * i], position[3u * i + 1u], position[3u * i + 2u]) + shift[i].xyz;
   gauss_sigma = axes[i].xyz;
   factor = color[i].rgb;
+  clip_plane = plane[i];
   vec2 corner = vec2(gl_VertexID & 1, (gl_VertexID >> 1) & 1) * 2.0 - 1.0;
   float radius = max(3.0 * max(gauss_sigma.x, max(gauss_sigma.y, gauss_sigma.z)), shift[i].w);
   cutoff = radius;

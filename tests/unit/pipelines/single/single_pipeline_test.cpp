@@ -147,6 +147,7 @@ TEST(SingleBake, SigmaFitSharpensTheSplattedFieldAtLayerJumps) {
     p.samples = 6000;
     p.directions = 32;
     p.sigma_fit = passes;
+    p.split = 0;  // the passes alone (single_split_test.cpp tests the split)
     SingleBake b = bake_single(test::shared_gpu().cl(), grid, p);
     double e = 0, r = 0;
     for (const Vec3& x : points) {

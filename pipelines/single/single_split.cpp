@@ -1,0 +1,146 @@
+// The single bake's split at jumps (setting `split`, step 4b of pipelines/single/single_bake.hpp):
+// a Gaussian whose support crosses a jump in the extinction (a ratio above `split`, such as the
+// interfaces between layers) becomes two pieces at the same centre with the same weight, each
+// clipped by the interface plane to its own side. The pieces of one sample sum to its Gaussian, so
+// the partition of one is kept; each piece carries the scattering coefficient of its side and
+// measures its transmittance from an anchor on its side (kernels/single/shade.cl, one-sided
+// differences), so neither is smoothed across the jump. The splat clips each piece's ray
+// integral at its plane (shaders/single/splat.frag).
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "pipelines/single/bake_support.hpp"
+
+namespace scatter::single_detail {
+namespace {
+
+double extinction(const VoxelGrid& g, size_t v) {
+  return (g.sigma_s[3 * v] + g.sigma_a[3 * v] + g.sigma_s[3 * v + 1] + g.sigma_a[3 * v + 1] + g.sigma_s[3 * v + 2] +
+          g.sigma_a[3 * v + 2]) / 3.0;
+}
+
+struct Split {
+  bool made = false;
+  Vec3 n;         // the other side's direction
+  double offset;  // plane: n . (x - centre) = offset (> 0: the centre is on its own side)
+  Vec3 anchor;    // a point of the medium on the other side
+};
+
+// The interface plane in a sample's support, if a jump is there. Voxels count only where they
+// are all medium (the surface's partial voxels are the mesh's, clipped by the depth peel).
+Split find_split(const VoxelGrid& g, const Vec3& c, double s, double ratio) {
+  Split out;
+  const size_t cv = g.index(std::clamp(int((c.x - g.origin.x) / g.voxel), 0, g.nx - 1),
+                            std::clamp(int((c.y - g.origin.y) / g.voxel), 0, g.ny - 1),
+                            std::clamp(int((c.z - g.origin.z) / g.voxel), 0, g.nz - 1));
+  const double own = extinction(g, cv);
+  if (!(g.occupancy[cv] > 0) || own <= 0) return out;
+  struct Cell {
+    Vec3 d;
+    double e;
+    bool other;
+  };
+  std::vector<Cell> cells;
+  double nearest = 1e30;
+  Vec3 towards;
+  for_support(g, c, s, [&](size_t v, double e) {
+    if (g.occupancy[v] < 0.999f) return;
+    double st = extinction(g, v);
+    bool other = st > ratio * own || st * ratio < own;
+    Vec3 d = g.center(int(v % g.nx), int((v / g.nx) % g.ny), int(v / (size_t(g.nx) * g.ny))) - c;
+    cells.push_back({d, e, other});
+    if (other && dot(d, d) < nearest) {
+      nearest = dot(d, d);
+      towards = d;
+    }
+  });
+  if (nearest >= 1e30) return out;
+  // The other side nearest the centre (a layer's far interface is left to its own samples):
+  // the plane's normal from the weighted centroids of that side and of the own side.
+  Vec3 so{0, 0, 0}, oo{0, 0, 0};
+  double ws = 0, wo = 0;
+  for (const Cell& k : cells) {
+    if (k.other && dot(k.d, towards) <= 0) continue;
+    (k.other ? oo : so) = (k.other ? oo : so) + k.d * k.e;
+    (k.other ? wo : ws) += k.e;
+  }
+  if (ws <= 0 || wo <= 0) return out;
+  Vec3 n = oo * (1 / wo) - so * (1 / ws);
+  const double len = std::sqrt(dot(n, n));
+  if (len <= 0) return out;
+  n = n * (1 / len);
+  // The offset that best separates the two sides (fewest weighted cells on the wrong side).
+  std::vector<std::pair<double, double>> proj;  // projection, +e for own, -e for other
+  for (const Cell& k : cells) {
+    if (k.other && dot(k.d, towards) <= 0) continue;
+    proj.push_back({dot(k.d, n), k.other ? -k.e : k.e});
+  }
+  std::sort(proj.begin(), proj.end());
+  // Sweep the threshold up through the sorted projections: wrong = own above + other below.
+  double own_above = 0, other_below = 0, best = 1e30, at = 0;
+  for (const auto& [x, e] : proj)
+    if (e > 0) own_above += e;
+  for (size_t k = 0; k <= proj.size(); ++k) {
+    const double err = own_above + other_below;
+    if (err < best) {
+      best = err;
+      at = k == 0 ? proj[0].first - g.voxel / 2
+                  : (k == proj.size() ? proj.back().first + g.voxel / 2 : (proj[k - 1].first + proj[k].first) / 2);
+    }
+    if (k == proj.size()) break;
+    if (proj[k].second > 0) own_above -= proj[k].second;
+    else other_below -= proj[k].second;
+  }
+  if (at <= 0) return out;  // the centre itself would lie on the other side
+  // The other side's mass of the Gaussian: too little is not worth a piece.
+  const double z = at / s;
+  const double mass = 0.5 * std::erfc(z / std::numbers::sqrt2);
+  if (mass < 0.02) return out;
+  // Its anchor: the mean of the Gaussian beyond the plane, at least half a voxel in.
+  const double mean = s * std::exp(-0.5 * z * z) / std::sqrt(2 * std::numbers::pi) / mass;
+  out.made = true;
+  out.n = n;
+  out.offset = at;
+  out.anchor = c + n * std::max(mean, at + 0.5 * g.voxel);
+  return out;
+}
+
+}  // namespace
+
+int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double ratio, SingleBake& bake) {
+  const int n = bake.count;
+  bake.plane.assign(4 * size_t(n), 0.f);
+  if (ratio <= 1) return 0;
+  std::vector<Split> splits(n);
+  parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
+    for (size_t i = a; i < b; ++i) {
+      Vec3 c{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]};
+      size_t v = g.index(std::clamp(int((c.x - g.origin.x) / g.voxel), 0, g.nx - 1),
+                         std::clamp(int((c.y - g.origin.y) / g.voxel), 0, g.ny - 1),
+                         std::clamp(int((c.z - g.origin.z) / g.voxel), 0, g.nz - 1));
+      if (layer[v] != 0) continue;  // the shell's samples are clipped by the mesh
+      splits[i] = find_split(g, c, bake.sigma[i], ratio);
+    }
+  });
+  int made = 0;
+  for (int i = 0; i < n; ++i) {
+    const Split& s = splits[i];
+    if (!s.made) continue;
+    ++made;
+    Vec3 c{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]};
+    const double d = dot(s.n, c) + s.offset;
+    // The sample keeps its own side: n . x <= d.
+    std::copy_n(std::array<float, 4>{float(s.n.x), float(s.n.y), float(s.n.z), float(d)}.data(), 4, &bake.plane[4 * size_t(i)]);
+    // The new piece: -n . x <= -d.
+    bake.position.insert(bake.position.end(), {float(c.x), float(c.y), float(c.z)});
+    bake.depth_at.insert(bake.depth_at.end(), {float(s.anchor.x), float(s.anchor.y), float(s.anchor.z)});
+    bake.sigma.push_back(bake.sigma[i]);
+    bake.weight.push_back(bake.weight[i]);
+    bake.plane.insert(bake.plane.end(), {float(-s.n.x), float(-s.n.y), float(-s.n.z), float(-d)});
+  }
+  bake.count = n + made;
+  return made;
+}
+
+}  // namespace scatter::single_detail
