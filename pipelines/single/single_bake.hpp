@@ -55,7 +55,8 @@ struct SingleBakeParams {
   int sigma_fit = 8;           // passes fitting each sample's sigma_s so the splatted field matches the voxels
   double adapt = 0.5;          // relative radius (2 - 1.5 t)^adapt from rho's rank t: 1 the paper's [r/2, 2r], 0 uniform
   uint32_t seed = 1;
-  // Reads directions, samples, sh_order, sh_depth, radius, candidates, seed from `r`.
+  // Reads directions, samples, sh_order, sh_depth, radius, candidates, density_guide, weight_fit,
+  // split, sigma_fit, adapt, seed from `r`.
   static SingleBakeParams read(SettingsReader& r);
 };
 

@@ -53,16 +53,15 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
   // pointwise spread of ~9 % after 4 passes, ~6.5 % after 64).
   if (p.weight_fit > 0) {
     auto fitted = [&](size_t v) { return layer[v] < shell; };
-    // out = A x (per voxel), restricted to the fitted voxels.
-    std::vector<std::vector<double>> vpart(threads - 1, std::vector<double>(voxels));
+    // out = A x (per voxel), restricted to the fitted voxels (the threads' arrays are accumulate's).
     auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {
       parallel_for(size_t(n), [&](size_t a, size_t b, size_t t) {
-        std::vector<double>& o = t == 0 ? out : vpart[t - 1];
+        std::vector<double>& o = t == 0 ? out : partial[t - 1];
         std::fill(o.begin(), o.end(), 0.0);
         for (size_t i = a; i < b; ++i)
           for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) { o[v] += x[i] * e; });
       }, threads);
-      for (const auto& part : vpart)
+      for (const auto& part : partial)
         for (size_t v = 0; v < voxels; ++v) out[v] += part[v];
       for (size_t v = 0; v < voxels; ++v)
         if (!fitted(v)) out[v] = 0;

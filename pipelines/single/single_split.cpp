@@ -7,6 +7,7 @@
 // differences), so neither is smoothed across the jump. The splat clips each piece's ray
 // integral at its plane (shaders/single/splat.frag).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
