@@ -99,6 +99,7 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
       const double next = norm2(s);
       for (int i = 0; i < n; ++i) dir[i] = s[i] + next / gamma * dir[i];
       gamma = next;
+      report(0.8 + 0.15 * (it + 1) / p.weight_fit);  // progress (and a cancel's chance) per iteration
     }
     // A Gaussian with a negative weight would subtract light: keep them non-negative.
     for (int i = 0; i < n; ++i) bake.weight[i] = static_cast<float>(std::max(0.0, w[i]));
