@@ -42,6 +42,19 @@ void parallel_for(size_t n, F&& f, size_t threads = 0) {
   if (error) std::rethrow_exception(error);
 }
 
+// The channel-mean extinction of voxel v.
+inline double extinction(const VoxelGrid& g, size_t v) {
+  return (g.sigma_s[3 * v] + g.sigma_a[3 * v] + g.sigma_s[3 * v + 1] + g.sigma_a[3 * v + 1] + g.sigma_s[3 * v + 2] +
+          g.sigma_a[3 * v + 2]) / 3.0;
+}
+
+// The voxel holding p (clamped to the grid).
+inline size_t voxel_at(const VoxelGrid& g, const Vec3& p) {
+  return g.index(std::clamp(int((p.x - g.origin.x) / g.voxel), 0, g.nx - 1),
+                 std::clamp(int((p.y - g.origin.y) / g.voxel), 0, g.ny - 1),
+                 std::clamp(int((p.z - g.origin.z) / g.voxel), 0, g.nz - 1));
+}
+
 // Voxel index range a Gaussian at p with cutoff radius R touches.
 struct Box {
   int i0, i1, j0, j1, k0, k1;

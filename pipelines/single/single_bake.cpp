@@ -201,10 +201,7 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   // neighbours are all medium (the surface is div T's already).
   if (p.density_guide) {
     std::vector<float> grad(voxels, 0.f), found;
-    auto st = [&](size_t v) {
-      return (g.sigma_s[3 * v] + g.sigma_a[3 * v] + g.sigma_s[3 * v + 1] + g.sigma_a[3 * v + 1] + g.sigma_s[3 * v + 2] +
-              g.sigma_a[3 * v + 2]) / 3.0;
-    };
+    auto st = [&](size_t v) { return extinction(g, v); };
     for (int k = 1; k + 1 < g.nz; ++k)
       for (int j = 1; j + 1 < g.ny; ++j)
         for (int i = 1; i + 1 < g.nx; ++i) {

@@ -16,11 +16,6 @@
 namespace scatter::single_detail {
 namespace {
 
-double extinction(const VoxelGrid& g, size_t v) {
-  return (g.sigma_s[3 * v] + g.sigma_a[3 * v] + g.sigma_s[3 * v + 1] + g.sigma_a[3 * v + 1] + g.sigma_s[3 * v + 2] +
-          g.sigma_a[3 * v + 2]) / 3.0;
-}
-
 struct Split {
   bool made = false;
   Vec3 n;         // the other side's direction
@@ -32,9 +27,7 @@ struct Split {
 // are all medium (the surface's partial voxels are the mesh's, clipped by the depth peel).
 Split find_split(const VoxelGrid& g, const Vec3& c, double s, double ratio) {
   Split out;
-  const size_t cv = g.index(std::clamp(int((c.x - g.origin.x) / g.voxel), 0, g.nx - 1),
-                            std::clamp(int((c.y - g.origin.y) / g.voxel), 0, g.ny - 1),
-                            std::clamp(int((c.z - g.origin.z) / g.voxel), 0, g.nz - 1));
+  const size_t cv = voxel_at(g, c);
   const double own = extinction(g, cv);
   if (!(g.occupancy[cv] > 0) || own <= 0) return out;
   struct Cell {
@@ -117,10 +110,7 @@ int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double
   parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
     for (size_t i = a; i < b; ++i) {
       Vec3 c{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]};
-      size_t v = g.index(std::clamp(int((c.x - g.origin.x) / g.voxel), 0, g.nx - 1),
-                         std::clamp(int((c.y - g.origin.y) / g.voxel), 0, g.ny - 1),
-                         std::clamp(int((c.z - g.origin.z) / g.voxel), 0, g.nz - 1));
-      if (layer[v] != 0) continue;  // the shell's samples are clipped by the mesh
+      if (layer[voxel_at(g, c)] != 0) continue;  // the shell's samples are clipped by the mesh
       splits[i] = find_split(g, c, bake.sigma[i], ratio);
     }
   });

@@ -121,41 +121,17 @@ TEST(SingleBake, GaussiansSumToAboutOneInside) {
   // Without normalisation the sum would follow the sample density, which varies 64-fold here.
 }
 
-// The splatted scattering coefficient sum_i w_i sigma_s,i G_i(x) (channel 0), by brute force, with
-// the weights' convention of gaussian_sum (a Gaussian's peak is its weight).
-double splatted_sigma_s(const SingleBake& b, const Vec3& x) {
-  double sum = 0;
-  for (int i = 0; i < b.count; ++i) {
-    Vec3 c{b.position[3 * i], b.position[3 * i + 1], b.position[3 * i + 2]};
-    double s = b.sigma[i], r2 = dot(x - c, x - c);
-    if (r2 > 9 * s * s) continue;
-    sum += b.weight[i] * b.sigma_s[3 * i] * std::exp(-0.5 * r2 / (s * s));  // as gaussian_sum
-  }
-  return sum;
-}
-
 TEST(SingleBake, SigmaFitSharpensTheSplattedFieldAtLayerJumps) {
   Scene s = load_scene(test::source_path("scenes/layers.json"));  // sigma_s jumps 10x every 0.25
   s.voxels = 32;
   VoxelGrid grid = voxelize(s, {.resolution = s.voxels, .margin = kSingleGridMargin});
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-0.9, 0.9);
-  std::vector<Vec3> points(300);
-  for (Vec3& x : points) x = {u(rng), u(rng), u(rng)};
   auto error = [&](int passes) {
     SingleBakeParams p;
     p.samples = 6000;
     p.directions = 32;
     p.sigma_fit = passes;
     p.split = 0;  // the passes alone (single_split_test.cpp tests the split)
-    SingleBake b = bake_single(test::shared_gpu().cl(), grid, p);
-    double e = 0, r = 0;
-    for (const Vec3& x : points) {
-      double truth = s.medium.sigma_s[0] * s.medium.density->density(x);
-      e += std::pow(splatted_sigma_s(b, x) - truth, 2);
-      r += truth * truth;
-    }
-    return std::sqrt(e / r);
+    return splatted_sigma_s_error(s, bake_single(test::shared_gpu().cl(), grid, p));
   };
   double mean_only = error(0), fitted = error(4);
   std::printf("splatted sigma_s: relative RMSE %.3f (mean) -> %.3f (4 passes)\n", mean_only, fitted);

@@ -35,18 +35,6 @@ bool on_side(const SingleBake& b, int i, const Vec3& x) {
   return pl[0] * x.x + pl[1] * x.y + pl[2] * x.z <= pl[3];
 }
 
-// sum_i w_i sigma_s,i G_i(x) over the pieces whose side holds x (channel 0).
-double splatted_sigma_s(const SingleBake& b, const Vec3& x) {
-  double sum = 0;
-  for (int i = 0; i < b.count; ++i) {
-    Vec3 c{b.position[3 * i], b.position[3 * i + 1], b.position[3 * i + 2]};
-    double s = b.sigma[i], r2 = dot(x - c, x - c);
-    if (r2 > 9 * s * s || !on_side(b, i, x)) continue;
-    sum += b.weight[i] * b.sigma_s[3 * i] * std::exp(-0.5 * r2 / (s * s));
-  }
-  return sum;
-}
-
 std::vector<Vec3> interior_points(int n) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-0.9, 0.9);
@@ -109,16 +97,7 @@ TEST(SingleSplit, PiecesPartitionEachGaussianAlongTheInterface) {
 TEST(SingleSplit, SplattedFieldKeepsTheJumps) {
   Scene s = layers();
   VoxelGrid grid = voxelize(s, {.resolution = s.voxels, .margin = kSingleGridMargin});
-  auto error = [&](double split) {
-    SingleBake b = bake_layers(grid, split);
-    double e = 0, r = 0;
-    for (const Vec3& x : interior_points(300)) {
-      double truth = s.medium.sigma_s[0] * s.medium.density->density(x);
-      e += std::pow(splatted_sigma_s(b, x) - truth, 2);
-      r += truth * truth;
-    }
-    return std::sqrt(e / r);
-  };
+  auto error = [&](double split) { return splatted_sigma_s_error(s, bake_layers(grid, split)); };
   double whole = error(0), split = error(2);
   std::printf("splatted sigma_s: relative RMSE %.3f (whole) -> %.3f (split)\n", whole, split);
   EXPECT_LT(split, 0.7 * whole);
