@@ -11,7 +11,7 @@ std::pair<std::string, std::string> AutoPipeline::choose(const Scene& scene, Ter
   if (terms != Terms::Single)
     return {"reference", "the " + to_string(terms) + " term: the reference; lbl and psf render it faster "
                                                      "but further from it (docs/BENCHMARKS.md)"};
-  Aabb b = scene.mesh.bounds();
+  Aabb b = scene.mesh->bounds();
   for (const Light& l : scene.lights)
     if (l.type != Light::Type::Directional && length(l.position - b.center()) <= length(b.size()) / 2 * 1.05)
       return {"reference", "a light inside the object's bounding sphere: no shadow map can see it"};

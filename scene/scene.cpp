@@ -16,7 +16,7 @@ void parse_mesh(JsonObject obj, const std::filesystem::path& base_dir, Scene& sc
   if (obj.has("shape")) {
     Shape shape = Shape::parse(obj);
     int detail = obj.integer("detail", 96, {8, 1024});
-    scene.mesh = shape.tessellate(detail);
+    scene.mesh = std::make_shared<const Mesh>(shape.tessellate(detail));
     scene.shape = shape;
   } else {
     std::filesystem::path file = obj.string("file", std::nullopt);
@@ -24,25 +24,26 @@ void parse_mesh(JsonObject obj, const std::filesystem::path& base_dir, Scene& sc
     Vec3 translate = obj.vec3("translate", Vec3{}, kCoord);
     std::optional<double> fit;
     if (obj.has("fit")) fit = obj.number("fit", std::nullopt, {1e-9, 1e9});
-    scene.mesh = load_mesh(file.is_absolute() ? file : base_dir / file);
-    WatertightReport report = check_watertight(scene.mesh);
+    Mesh mesh = load_mesh(file.is_absolute() ? file : base_dir / file);
+    WatertightReport report = check_watertight(mesh);
     if (!report.watertight())
       throw ValidationError(obj.path("file"), "mesh " + file.string() + " is not watertight (" +
                                                   report.summary() + "); it cannot bound a volume");
     // A closed mesh can still enclose nothing (a point, a flat double-sided sheet).
-    Aabb b = scene.mesh.bounds();
+    Aabb b = mesh.bounds();
     Vec3 s = b.size();
     double longest = std::max({s.x, s.y, s.z});
-    if (!(std::abs(scene.mesh.volume()) > 1e-9 * s.x * s.y * s.z) || longest <= 0)
+    if (!(std::abs(mesh.volume()) > 1e-9 * s.x * s.y * s.z) || longest <= 0)
       throw ValidationError(obj.path("file"), "mesh " + file.string() + " encloses no volume");
     if (fit) {
       // Centre on the origin and scale so the longest side of the bounding box is `fit`.
-      scene.mesh.transform(1.0, -b.center());
+      mesh.transform(1.0, -b.center());
       scale *= *fit / longest;
     }
-    scene.mesh.transform(scale, translate);
-    scene.mesh.orient_outwards();
-    scene.mesh.compute_normals();
+    mesh.transform(scale, translate);
+    mesh.orient_outwards();
+    mesh.compute_normals();
+    scene.mesh = std::make_shared<const Mesh>(std::move(mesh));
   }
   obj.finish();
 }

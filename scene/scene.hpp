@@ -66,7 +66,9 @@ struct SceneLimits {
 };
 
 struct Scene {
-  Mesh mesh;                   // what is rasterised; watertight
+  // What is rasterised; watertight. Shared: the frames of a session, and requests for the same
+  // scene, hold one mesh.
+  std::shared_ptr<const Mesh> mesh = std::make_shared<const Mesh>();
   std::optional<Shape> shape;  // the exact solid when the mesh came from a procedural shape
   Medium medium;
   std::vector<Light> lights;

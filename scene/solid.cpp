@@ -110,7 +110,7 @@ std::unique_ptr<Solid> make_shape_solid(const Shape& shape) {
 }
 std::unique_ptr<Solid> make_solid(const Scene& scene) {
   if (scene.shape) return make_shape_solid(*scene.shape);
-  return make_mesh_solid(scene.mesh);
+  return make_mesh_solid(*scene.mesh);
 }
 
 }  // namespace scatter

@@ -142,7 +142,8 @@ std::vector<float> Lattice::irradiance() {
   return irr;
 }
 
-Convergence Lattice::converge(double tolerance, int max_steps, int check_every) {
+Convergence Lattice::converge(double tolerance, int max_steps, int check_every,
+                              const std::function<void(double)>& progress) {
   Convergence c;
   check_every = std::max(check_every, 1);
   auto probe_values = [&] {
@@ -156,6 +157,7 @@ Convergence Lattice::converge(double tolerance, int max_steps, int check_every) 
   double energy_before = energy();
   while (c.steps < max_steps) {
     c.steps += step(std::min(check_every, max_steps - c.steps));
+    if (progress) progress(double(c.steps) / max_steps);  // may throw to stop (a cancelled render)
     std::vector<double> now = probe_values();
     double energy_now = energy();
     double scale = 0;

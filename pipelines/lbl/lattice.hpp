@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <vector>
 
 #include "gpu/cl_context.hpp"
@@ -55,7 +56,9 @@ class Lattice {
 
   // Steps until, between checks `check_every` steps apart, the relative change of the probes'
   // irradiance and of the total energy are both under `tolerance`, or `max_steps` are done.
-  Convergence converge(double tolerance, int max_steps, int check_every);
+  // `progress` (optional) hears the fraction of max_steps done after each check; it may throw.
+  Convergence converge(double tolerance, int max_steps, int check_every,
+                       const std::function<void(double)>& progress = {});
 
   // Milliseconds per lattice step over `steps` more steps, and per STREAM-like copy of the state
   // (18 floats per node) over `copies` copies; the bytes each moves through memory.

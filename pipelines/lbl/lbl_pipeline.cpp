@@ -21,7 +21,7 @@ std::string_view bytes_of(const std::vector<T>& v) {
 // settings that shape them (not the lights, not the camera).
 std::string material_key(const Scene& scene, const LblSettings& s) {
   BakeKey k;
-  k.add_bytes("positions", bytes_of(scene.mesh.positions)).add_bytes("indices", bytes_of(scene.mesh.indices));
+  k.add_bytes("positions", bytes_of(scene.mesh->positions)).add_bytes("indices", bytes_of(scene.mesh->indices));
   // The density object is held by the state while compared, so its address is not reused.
   k.add("density", std::to_string(reinterpret_cast<uintptr_t>(scene.medium.density.get())));
   for (int c = 0; c < 3; ++c) k.add("sigma_s", scene.medium.sigma_s[c]).add("sigma_a", scene.medium.sigma_a[c]);
@@ -58,7 +58,7 @@ double second_scatter_bound(double max_sigma_s, double longest_side) {
 // device cannot allocate (the grid's sides estimated from the mesh's bounds).
 void check_lattice_size(const Scene& scene, const LblSettings& s, int margin, uint64_t max_alloc) {
   Aabb box;
-  for (const Vec3& p : scene.mesh.positions) box.add(p);
+  for (const Vec3& p : scene.mesh->positions) box.add(p);
   Vec3 size = box.size();
   double longest = std::max({size.x, size.y, size.z});
   if (!(longest > 0)) return;
@@ -141,7 +141,7 @@ Decision decide(const lbl::State* state, const Scene& scene, const RenderRequest
   } else {
     // Before the volume exists: the medium's coefficients at density 1 over the mesh's extent.
     Aabb box;
-    for (const Vec3& p : scene.mesh.positions) box.add(p);
+    for (const Vec3& p : scene.mesh->positions) box.add(p);
     Vec3 size = box.size();
     double ms = std::max({scene.medium.sigma_s.x, scene.medium.sigma_s.y, scene.medium.sigma_s.z});
     d.bound = second_scatter_bound(ms, std::max({size.x, size.y, size.z}));
@@ -296,7 +296,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   if (d.diffuse) {
     if (!s.warm && interleaved_steps == 0) st.lattice->clear();
     st.lattice->set_source(st.source);
-    lbl::Convergence c = st.lattice->converge(s.tolerance, s.max_steps, s.check_every);
+    lbl::Convergence c = st.lattice->converge(s.tolerance, s.max_steps, s.check_every, request.progress);
     queue.finish();
     st.diffused = true;
     st.diffusion = diffusion_key(s);

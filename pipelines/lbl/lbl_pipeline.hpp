@@ -31,6 +31,7 @@
 
 #include "pipelines/lbl/lattice.hpp"
 #include "pipelines/lbl/volume.hpp"
+#include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 #include "pipelines/surface/surface_pipeline.hpp"
 
@@ -60,6 +61,9 @@ struct LblSettings {
 
 class LblPipeline : public Pipeline {
  public:
+  // What render() (bake: bake()) of `scene` will cost, without a GPU or an instance
+  // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
+  static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   explicit LblPipeline(gpu::Gpu& gpu);
   ~LblPipeline() override;
   std::string name() const override { return "lbl"; }

@@ -19,8 +19,8 @@ std::string_view bytes_of(const std::vector<T>& v) {
 std::string medium_fingerprint(const Scene& scene) {
   std::ostringstream s;
   s.precision(17);
-  s << std::hash<std::string_view>{}(bytes_of(scene.mesh.positions)) << '|'
-    << std::hash<std::string_view>{}(bytes_of(scene.mesh.indices)) << '|'
+  s << std::hash<std::string_view>{}(bytes_of(scene.mesh->positions)) << '|'
+    << std::hash<std::string_view>{}(bytes_of(scene.mesh->indices)) << '|'
     << reinterpret_cast<uintptr_t>(scene.medium.density.get()) << '|' << scene.voxels << '|'
     << scene.medium.g;
   for (const Vec3* v : {&scene.medium.sigma_s, &scene.medium.sigma_a})

@@ -18,6 +18,7 @@
 #include <memory>
 
 #include "pipelines/cl_scene.hpp"
+#include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 #include "pipelines/psf/light_pyramid.hpp"
 #include "pipelines/psf/psf_model.hpp"
@@ -36,6 +37,9 @@ struct PsfSettings {
 
 class PsfPipeline : public Pipeline {
  public:
+  // What render() (bake: bake()) of `scene` will cost, without a GPU or an instance
+  // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
+  static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   explicit PsfPipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
   std::string name() const override { return "psf"; }
   std::vector<Terms> supported_terms() const override { return {Terms::Single, Terms::Multiple, Terms::All}; }

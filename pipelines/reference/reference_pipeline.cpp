@@ -85,7 +85,7 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   const bool dielectric = scene.medium.ior != 1.0;
   FlatBvh bvh;
   if (dielectric) {
-    bvh = build_bvh(scene.mesh);
+    bvh = build_bvh(*scene.mesh);
     clock.stop("boundary");
   }
 

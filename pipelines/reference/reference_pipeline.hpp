@@ -11,6 +11,7 @@
 // max_depth (1024) scattering events per path; mc (0) use Monte Carlo for the single term.
 #pragma once
 
+#include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace scatter {
@@ -26,6 +27,9 @@ struct ReferenceSettings {
 
 class ReferencePipeline : public Pipeline {
  public:
+  // What render() (bake: bake()) of `scene` will cost, without a GPU or an instance
+  // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
+  static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   explicit ReferencePipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
   std::string name() const override { return "reference"; }
   std::vector<Terms> supported_terms() const override {

@@ -13,31 +13,25 @@
 #include "protocol/json_reader.hpp"
 
 namespace scatter {
+
+SingleSettings SingleSettings::read(const Settings& settings) {
+  SettingsReader r(settings, "single");
+  SingleSettings s;
+  s.bake = SingleBakeParams::read(r);
+  s.clip_back = r.integer("clip_back", 1, 0, 1) == 1;
+  s.exact_tr = r.integer("exact_tr", 1, 0, 1) == 1;
+  s.tr_gradient = r.integer("tr_gradient", 1, 0, 1) == 1;
+  s.tr_gradient_max = r.number("tr_gradient_max", 2.0, 0.0, 4.0);
+  s.tr_hessian = r.integer("tr_hessian", 1, 0, 1) == 1;
+  r.finish();
+  return s;
+}
+
 namespace {
 
 // Bump when the bake's results change, so old cache entries are not reused.
 constexpr const char* kSingleBakeVersion = "single-7";
 
-struct SingleSettings {
-  SingleBakeParams bake;
-  bool clip_back = true;
-  bool exact_tr = true;
-  bool tr_gradient = true;
-  double tr_gradient_max = 2.0;
-  bool tr_hessian = true;
-  static SingleSettings read(const Settings& settings) {
-    SettingsReader r(settings, "single");
-    SingleSettings s;
-    s.bake = SingleBakeParams::read(r);
-    s.clip_back = r.integer("clip_back", 1, 0, 1) == 1;
-    s.exact_tr = r.integer("exact_tr", 1, 0, 1) == 1;
-    s.tr_gradient = r.integer("tr_gradient", 1, 0, 1) == 1;
-    s.tr_gradient_max = r.number("tr_gradient_max", 2.0, 0.0, 4.0);
-    s.tr_hessian = r.integer("tr_hessian", 1, 0, 1) == 1;
-    r.finish();
-    return s;
-  }
-};
 
 template <class T>
 std::string_view bytes_of(const std::vector<T>& v) {
@@ -56,8 +50,8 @@ void add_params(BakeKey& key, const SingleBakeParams& p) {
 std::string fingerprint(const Scene& scene, const SingleBakeParams& p) {
   std::string s;
   auto h = [&](std::string_view b) { s += std::to_string(std::hash<std::string_view>{}(b)) + "|"; };
-  h(bytes_of(scene.mesh.positions));
-  h(bytes_of(scene.mesh.indices));
+  h(bytes_of(scene.mesh->positions));
+  h(bytes_of(scene.mesh->indices));
   s += std::to_string(reinterpret_cast<uintptr_t>(scene.medium.density.get())) + "|";
   for (const Vec3* v : {&scene.medium.sigma_s, &scene.medium.sigma_a})
     for (int c = 0; c < 3; ++c) s += exact_number((*v)[c]) + ",";
@@ -232,7 +226,10 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   RenderResult result;
   result.plan = plan(scene, request);
   SingleSettings s = SingleSettings::read(request.settings);
-  BakeResult baked = bake(scene, request);
+  // A bake inside a render reports to the render's progress, which may stop it (a cancel).
+  BakeProgress progress;
+  if (request.progress) progress = [&](const std::string&, double) { request.progress(0); };
+  BakeResult baked = bake(scene, request, progress);
   result.timings = baked.timings;
   StageClock clock(result.timings);
   gpu_.gl().make_current();
@@ -245,7 +242,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   if (!current_.uploaded) upload();
   const SingleBake& b = *current_.bake;
 
-  MeshBuffers mesh(scene.mesh);
+  MeshBuffers mesh(*scene.mesh);
   CameraMatrices cam = camera_matrices(scene);
   const Vec3& eye = scene.camera.position;
   RenderTarget front(scene.width, scene.height), back(scene.width, scene.height);

@@ -29,13 +29,27 @@
 
 #include "gpu/cl_context.hpp"
 #include "gpu/gl_objects.hpp"
+#include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 #include "pipelines/single/single_bake.hpp"
 
 namespace scatter {
 
+struct SingleSettings {
+  SingleBakeParams bake;
+  bool clip_back = true;
+  bool exact_tr = true;
+  bool tr_gradient = true;
+  double tr_gradient_max = 2.0;
+  bool tr_hessian = true;
+  static SingleSettings read(const Settings& settings);
+};
+
 class SinglePipeline : public Pipeline {
  public:
+  // What render() (bake: bake()) of `scene` will cost, without a GPU or an instance
+  // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
+  static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   SinglePipeline(gpu::Gpu& gpu, BakeCache* cache);
   ~SinglePipeline() override;
   std::string name() const override { return "single"; }

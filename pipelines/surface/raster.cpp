@@ -10,7 +10,7 @@ namespace scatter {
 
 CameraMatrices camera_matrices(const Scene& scene) {
   const Camera& cam = scene.camera;
-  Aabb b = scene.mesh.bounds();
+  Aabb b = scene.mesh->bounds();
   double radius = length(b.size()) / 2;
   double dist = length(b.center() - cam.position);
   CameraMatrices m;
@@ -166,7 +166,7 @@ void set_camera_uniforms(GLuint p, const Scene& scene) {
 }
 
 LightView light_view(const Light& l, const Scene& scene, const std::string& pipeline) {
-  Aabb b = scene.mesh.bounds();
+  Aabb b = scene.mesh->bounds();
   Vec3 c = b.center();
   double radius = length(b.size()) / 2 * 1.02;
   LightView v;

@@ -20,7 +20,7 @@ Plan SurfacePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   SurfaceSettings s = SurfaceSettings::read(request.settings);
   Plan p{name(), request.terms, {}};
-  p.stages.push_back({"upload", true, std::to_string(scene.mesh.triangle_count()) + " triangles"});
+  p.stages.push_back({"upload", true, std::to_string(scene.mesh->triangle_count()) + " triangles"});
   p.stages.push_back({"shadow_maps", s.shadows && !scene.lights.empty(),
                       s.shadows ? std::to_string(s.shadow_size) + "^2 distance map per light"
                                 : "shadows off (settings.shadows 0): every facet facing a light is lit"});
@@ -38,7 +38,7 @@ RenderResult SurfacePipeline::render(const Scene& scene, const RenderRequest& re
   if (!program_) program_ = gpu::build_program("shaders/surface/mesh.vert", "shaders/surface/blinn_phong.frag");
   SurfaceSettings s = SurfaceSettings::read(request.settings);
   StageClock clock(result.timings);
-  MeshBuffers mesh(scene.mesh);
+  MeshBuffers mesh(*scene.mesh);
   RenderTarget target(scene.width, scene.height);
   glFinish();
   clock.stop("upload");
@@ -49,7 +49,7 @@ RenderResult SurfacePipeline::render(const Scene& scene, const RenderRequest& re
   if (s.shadows) {
     if (!distance_program_)
       distance_program_ = gpu::build_program("shaders/thickness/distance.vert", "shaders/thickness/distance.frag");
-    Aabb b = scene.mesh.bounds();
+    Aabb b = scene.mesh->bounds();
     // A texel's footprint at the far side of the object, so a lit surface does not shadow itself.
     float bias = static_cast<float>(2.5 * length(b.size()) / s.shadow_size);
     glProgramUniform1f(prog, glGetUniformLocation(prog, "shadow_bias"), bias);

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "gpu/gl_objects.hpp"
+#include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace scatter {
@@ -17,6 +18,9 @@ struct SurfaceSettings {
 
 class SurfacePipeline : public Pipeline {
  public:
+  // What render() (bake: bake()) of `scene` will cost, without a GPU or an instance
+  // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
+  static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   explicit SurfacePipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
   std::string name() const override { return "surface"; }
   std::vector<Terms> supported_terms() const override { return {Terms::Surface}; }

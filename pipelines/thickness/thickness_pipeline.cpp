@@ -8,23 +8,15 @@
 #include "protocol/json_reader.hpp"
 
 namespace scatter {
-namespace {
 
-struct ThicknessSettings {
-  int steps = 32;
-  int shadow_size = 1024;
-  static ThicknessSettings read(const Settings& settings) {
-    SettingsReader r(settings, "thickness");
-    ThicknessSettings s;
-    s.steps = r.integer("steps", s.steps, 1, 1024);
-    s.shadow_size = r.integer("shadow_size", s.shadow_size, 64, 8192);
-    r.finish();
-    return s;
-  }
-};
-
-
-}  // namespace
+ThicknessSettings ThicknessSettings::read(const Settings& settings) {
+  SettingsReader r(settings, "thickness");
+  ThicknessSettings s;
+  s.steps = r.integer("steps", s.steps, 1, 1024);
+  s.shadow_size = r.integer("shadow_size", s.shadow_size, 64, 8192);
+  r.finish();
+  return s;
+}
 
 Plan ThicknessPipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
@@ -57,7 +49,7 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
     empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
   }
   StageClock clock(result.timings);
-  MeshBuffers mesh(scene.mesh);
+  MeshBuffers mesh(*scene.mesh);
   const GLuint dist = distance_program_.get(), integ = integrate_program_.get();
 
   // One distance map per light, seen from the light.

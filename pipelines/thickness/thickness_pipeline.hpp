@@ -10,12 +10,22 @@
 #pragma once
 
 #include "gpu/gl_objects.hpp"
+#include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace scatter {
 
+struct ThicknessSettings {
+  int steps = 32;
+  int shadow_size = 1024;
+  static ThicknessSettings read(const Settings& settings);
+};
+
 class ThicknessPipeline : public Pipeline {
  public:
+  // What render() (bake: bake()) of `scene` will cost, without a GPU or an instance
+  // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
+  static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   explicit ThicknessPipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
   std::string name() const override { return "thickness"; }
   std::vector<Terms> supported_terms() const override { return {Terms::Single}; }

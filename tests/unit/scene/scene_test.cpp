@@ -26,7 +26,7 @@ TEST(Scene, MinimalSceneHasDefaults) {
   EXPECT_TRUE(s.medium.density->homogeneous());
   ASSERT_EQ(s.lights.size(), 1u);
   EXPECT_EQ(s.lights[0].type, Light::Type::Directional);
-  EXPECT_TRUE(check_watertight(s.mesh).watertight());
+  EXPECT_TRUE(check_watertight(*s.mesh).watertight());
 }
 
 TEST(Scene, ShippedScenesParse) {
@@ -35,7 +35,7 @@ TEST(Scene, ShippedScenesParse) {
     Scene s = load_scene(test::source_path(std::string("scenes/") + name + ".json"));
     EXPECT_EQ(s.width, 512);
     EXPECT_FALSE(s.lights.empty());
-    EXPECT_GT(s.mesh.volume(), 0);
+    EXPECT_GT(s.mesh->volume(), 0);
   }
 }
 
@@ -136,7 +136,7 @@ TEST(Scene, FitCentresAndScalesTheMesh) {
   nlohmann::json s = test::minimal_scene();
   s["mesh"] = {{"file", "/usr/share/glmark2/models/bunny.obj"}, {"fit", 2.0}};
   Scene scene = parse_scene(s, ".");
-  Aabb b = scene.mesh.bounds();
+  Aabb b = scene.mesh->bounds();
   EXPECT_NEAR(std::max({b.size().x, b.size().y, b.size().z}), 2.0, 1e-9);
   EXPECT_NEAR(length(b.center()), 0.0, 1e-9);
 }

@@ -52,7 +52,7 @@ TEST(Voxelizer, ConcaveMeshesMatchTheirPolyhedralVolume) {
 
   Scene bunny = scene_with({{"file", "/usr/share/glmark2/models/bunny.obj"}, {"fit", 2.0}});
   VoxelGrid g = voxelize(bunny, {.resolution = 128});
-  EXPECT_NEAR(g.volume() / bunny.mesh.volume(), 1.0, 0.01);
+  EXPECT_NEAR(g.volume() / bunny.mesh->volume(), 1.0, 0.01);
 }
 
 TEST(Voxelizer, CoefficientsFollowDensityAndBlocker) {

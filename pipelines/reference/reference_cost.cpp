@@ -1,0 +1,71 @@
+// ReferencePipeline::estimate: what reference_pipeline.cpp's render() allocates and how long it
+// traces or marches (pipelines/cost.hpp).
+#include <algorithm>
+
+#include "pipelines/cost_support.hpp"
+#include "pipelines/reference/reference_pipeline.hpp"
+
+namespace scatter {
+
+CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest& request, bool bake) {
+  using namespace cost;
+  ReferenceSettings s = ReferenceSettings::read(request.settings);
+  Ledger upload, frame;
+  if (bake) return upload.finish("reference");  // nothing to bake
+  const GridShape g = grid_shape(scene, 1);
+  const double n = g.count(), px = double(scene.width) * scene.height;
+  const std::string grid = g.text() + " voxels";
+  // Peak while uploading (render: voxelize(), then upload_medium()); the grid lives to the end.
+  add_medium_upload(upload, scene, g);
+  // Later, per frame: the grid and two medium buffers stay; Monte Carlo adds sum and sum_sq
+  // (device), zeros, host_sum, host_sq, the mean and the standard error (host); the marcher
+  // one output buffer and the image.
+  const bool march = request.terms == Terms::Single && !s.mc;
+  frame.host("scene.voxels", n * kGridBytes, grid + " x 29 B (grid)");
+  frame.device("scene.voxels", n * 24, grid + " x 24 B (sigma_s, sigma_t)");
+  frame.host("scene.image.width", px * (march ? 12 : 72), std::to_string(scene.width) + "x" +
+                                                              std::to_string(scene.height) + " px x " +
+                                                              (march ? "12" : "72") + " B");
+  frame.device("scene.image.width", px * (march ? 12 : 24), "the image's device buffers");
+  if (scene.medium.ior != 1.0) {
+    // FlatBvh (scene/bvh.hpp) on the host and its three buffers: ~2 nodes and 9 floats a triangle.
+    double tris = double(scene.mesh->triangle_count());
+    frame.host("scene.mesh", tris * 100, "BVH");
+    frame.device("scene.mesh", tris * 100, "BVH buffers");
+  }
+
+  const double lights = std::max<size_t>(scene.lights.size(), 1), covered = px * coverage(scene);
+  if (march) {
+    // kernels/reference/single_march.cl: per covered pixel (voxels / step) steps along the view
+    // ray, each marching (voxels / step) steps to every light. Measured: sphere 256^2 px, 64^3,
+    // 1 light, step 0.25: 12.7 s = 7.4 ns a unit; taken as 15 ns.
+    double per_side = scene.voxels / s.step;
+    frame.time("settings.step", covered * lights * per_side * per_side * 15e-9,
+               "march " + std::to_string(int(covered)) + " covered px x " + std::to_string(int(lights)) +
+                   " lights x (voxels/step)^2");
+  } else {
+    // kernels/reference/path.cl: per path (1 + scattering events) vertices, each a free flight
+    // and a shadow ray per light, crossing bricks of 8 voxels (more per unit length at finer
+    // grids). Events: a/(1 - a) absorption-limited, tau + tau^2/2 escape-limited (tau: the
+    // optical radius), max_depth at most; 1 for the single term.
+    MediumBounds m = medium_bounds(scene);
+    double tau = m.sigma_t * g.longest / 2;
+    double events = request.terms == Terms::Single
+                        ? 1.0
+                        : std::min({double(s.max_depth), m.albedo < 1 ? m.albedo / (1 - m.albedo) : 1e9, tau + tau * tau / 2});
+    double bricks = 1 + scene.voxels / 64.0;
+    // Opaque blockers give their bricks a huge majorant: null collisions (cube-torus: ~5x per
+    // path against the sphere, 2.5 s at 128^2 px, spp 12, 2 lights).
+    double blocker = scene.medium.density && scene.medium.density->blocker_sigma_a() > 0 ? 3 : 1;
+    // Measured: sphere 64^3, 256^2 px, spp 12: 1 light 1.36 s (181 ns a unit), 16 lights 7.9 s
+    // (157 ns). Taken as 250 ns, and 0.2 us a path that misses.
+    double units = covered * s.spp * (1 + events) * (1 + 0.6 * lights) * bricks * blocker;
+    frame.time("settings.spp", units * 250e-9 + (px - covered) * s.spp * 0.2e-6,
+               std::to_string(int(covered)) + " covered px x " + std::to_string(s.spp) + " spp x " +
+                   short_number(1 + events) + " vertices x " + std::to_string(int(lights)) + " lights");
+  }
+  upload.peak_of(frame);
+  return upload.finish("reference");
+}
+
+}  // namespace scatter
