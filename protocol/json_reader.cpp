@@ -139,9 +139,16 @@ void JsonObject::finish() const {
     if (!used_.count(k)) throw ValidationError(path(k), "is not a known field");
 }
 
-nlohmann::json parse_json(std::string_view text, const std::string& what) {
+nlohmann::json parse_json(std::string_view text, const std::string& what, int max_depth) {
+  auto bounded = [&](int depth, nlohmann::json::parse_event_t event, nlohmann::json&) {
+    bool opens = event == nlohmann::json::parse_event_t::object_start ||
+                 event == nlohmann::json::parse_event_t::array_start;
+    if (opens && depth >= max_depth)
+      throw ValidationError(what, "nests arrays and objects deeper than " + std::to_string(max_depth) + " levels");
+    return true;
+  };
   try {
-    return nlohmann::json::parse(text);
+    return nlohmann::json::parse(text, bounded);
   } catch (const nlohmann::json::parse_error& e) {
     // e.what() carries the byte offset; strip the library's "[json.exception...]" prefix.
     std::string msg = e.what();

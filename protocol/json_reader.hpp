@@ -69,7 +69,14 @@ class JsonObject {
   std::set<std::string, std::less<>> used_;
 };
 
-// Parses text without throwing on malformed input; reports the parser's position on failure.
-nlohmann::json parse_json(std::string_view text, const std::string& what);
+// The deepest nesting of arrays and objects that parse_json accepts: enough for any scene or
+// message, and far from the recursion depth that would exhaust a thread's stack in code that walks
+// the document.
+constexpr int kMaxJsonDepth = 64;
+
+// Parses untrusted text; throws ValidationError(what, ...) naming the parser's position for
+// malformed input, and for nesting deeper than `max_depth` (checked in the parser's callback, as
+// each level opens, before anything recurses over the document).
+nlohmann::json parse_json(std::string_view text, const std::string& what, int max_depth = kMaxJsonDepth);
 
 }  // namespace scatter
