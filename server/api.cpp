@@ -3,7 +3,10 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cctype>
+#include <future>
 #include <map>
+#include <optional>
 
 #include "bake/cache.hpp"
 #include "gpu/embedded_sources.hpp"
@@ -16,7 +19,8 @@ namespace scatter::server {
 namespace {
 
 // Inline scenes may only name files inside the scenes folder: no absolute paths, no "..".
-void check_file_fields(const nlohmann::json& j, const std::string& path) {
+void check_file_fields(const nlohmann::json& j, const std::string& path, int depth = 0) {
+  if (depth > kMaxJsonDepth) throw ValidationError(path, "nests deeper than " + std::to_string(kMaxJsonDepth) + " levels");
   if (j.is_object()) {
     for (const auto& [key, value] : j.items()) {
       std::string p = path + "." + key;
@@ -28,17 +32,65 @@ void check_file_fields(const nlohmann::json& j, const std::string& path) {
           throw ValidationError(p, "must be a path inside the server's scene folder (no absolute "
                                    "paths, no \"..\")");
       }
-      check_file_fields(value, p);
+      check_file_fields(value, p, depth + 1);
     }
   } else if (j.is_array()) {
-    for (size_t i = 0; i < j.size(); ++i) check_file_fields(j[i], path + "[" + std::to_string(i) + "]");
+    for (size_t i = 0; i < j.size(); ++i) check_file_fields(j[i], path + "[" + std::to_string(i) + "]", depth + 1);
   }
+}
+
+// Percent-decoding of one query value ("a%2Bb" -> "a+b", "+" -> " "); nullopt if malformed.
+std::optional<std::string> percent_decode(std::string_view s) {
+  std::string out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '+') {
+      out += ' ';
+    } else if (s[i] != '%') {
+      out += s[i];
+    } else {
+      if (i + 2 >= s.size() || !std::isxdigit(static_cast<unsigned char>(s[i + 1])) ||
+          !std::isxdigit(static_cast<unsigned char>(s[i + 2])))
+        return std::nullopt;
+      out += static_cast<char>(std::stoi(std::string(s.substr(i + 1, 2)), nullptr, 16));
+      i += 2;
+    }
+  }
+  return out;
+}
+
+// Compares without an early exit, so that the time taken does not tell how much of a guess matched.
+bool same_secret(std::string_view a, std::string_view b) {
+  unsigned char diff = a.size() == b.size() ? 0 : 1;
+  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ (i < b.size() ? b[i] : 0));
+  return diff == 0;
+}
+
+// A message for the client: the server's own folders are not its business.
+std::string without_paths(std::string m, const ApiOptions& o) {
+  for (const auto& [dir, name] : {std::pair{o.assets_dir, std::string("asset ")}, std::pair{o.scenes_dir, std::string()}}) {
+    if (dir.empty()) continue;
+    for (std::string prefix : {dir.string() + "/", dir.string()})
+      for (size_t at; !prefix.empty() && (at = m.find(prefix)) != std::string::npos;) m.replace(at, prefix.size(), name);
+  }
+  return m;
+}
+
+std::string busy_message(const RenderQueue& q) {
+  return "the render queue is full (" + std::to_string(q.max_depth()) + " jobs waiting); try again shortly";
 }
 
 }  // namespace
 
-Api::Api(ApiOptions options, RenderQueue& queue, Metrics& metrics)
-    : options_(std::move(options)), queue_(queue), metrics_(metrics) {}
+Api::Api(ApiOptions options, RenderQueue& queue, Metrics& metrics, RenderQueue* bakes, Offload offload)
+    : options_(std::move(options)),
+      queue_(queue),
+      bake_queue_(bakes ? *bakes : queue),
+      metrics_(metrics),
+      offload_(offload ? std::move(offload) : Offload([](std::function<void()> f) { f(); })) {}
+
+void Api::cancel_bakes() {
+  for (const auto& j : bakes_.list()) j->cancel();
+}
 
 HttpResponse Api::error(int status, const std::string& message, const std::string& field) {
   nlohmann::json j = {{"error", message}};
@@ -46,72 +98,76 @@ HttpResponse Api::error(int status, const std::string& message, const std::strin
   return json_response(j, status);
 }
 
-HttpResponse Api::handle(const HttpRequest& request) {
-  std::string route_name = "other";
-  HttpResponse r;
+void Api::handle(const HttpRequest& request, Respond respond) {
+  auto route_name = std::make_shared<std::string>("other");
   auto start = std::chrono::steady_clock::now();
+  Respond once = [this, route_name, start, method = request.method, respond = std::move(respond)](HttpResponse r) {
+    metrics_.count_request(*route_name, r.status);
+    spdlog::info("event=request method={} route={} status={} ms={:.1f}", method, *route_name, r.status,
+                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    respond(std::move(r));
+  };
+  // route() answers through `once`, or throws before it has: the error is the answer.
   try {
-    r = route(request, route_name);
+    route(request, *route_name, once);
+  } catch (const RequestTooCostly& e) {
+    once(error(413, e.what(), e.field()));
   } catch (const ValidationError& e) {
-    r = error(400, e.what(), e.field());
+    once(error(400, without_paths(e.what(), options_), e.field()));
   } catch (const gpu::GpuError& e) {
-    r = error(503, e.what());
+    once(error(503, without_paths(e.what(), options_)));
   } catch (const BakeJobs::Busy& e) {
-    r = error(503, e.what());
+    once(error(503, e.what()));
   } catch (const std::exception& e) {
     // A bad request must never take the daemon down; report and go on.
-    r = error(500, std::string("internal error: ") + e.what());
+    spdlog::error("event=internal_error route={} error=\"{}\"", *route_name, e.what());
+    once(error(500, "internal error: " + without_paths(e.what(), options_)));
   }
-  metrics_.count_request(route_name, r.status);
-  spdlog::info("event=request method={} route={} status={} ms={:.1f}", request.method, route_name, r.status,
-               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-  return r;
 }
 
-HttpResponse Api::route(const HttpRequest& request, std::string& route_name) {
+HttpResponse Api::handle(const HttpRequest& request) {
+  std::promise<HttpResponse> answer;
+  auto result = answer.get_future();
+  handle(request, [&answer](HttpResponse r) { answer.set_value(std::move(r)); });
+  return result.get();
+}
+
+bool Api::quick(const HttpRequest& request) {
+  std::string path = request.target.substr(0, request.target.find('?'));
+  if (request.method == "GET")
+    return path == "/api/health" || path == "/api/pipelines" || path == "/metrics" || path == "/api/assets" ||
+           path == "/api/bakes" || path.rfind("/api/bakes/", 0) == 0 || path == "/" || path == "/index.html" ||
+           path == "/app.js" || path == "/style.css";
+  return request.method == "DELETE" && path.rfind("/api/bakes/", 0) == 0;
+}
+
+void Api::route(const HttpRequest& request, std::string& route_name, const Respond& respond) {
   std::string path = request.target.substr(0, request.target.find('?'));
   if (!authorized(request)) {
     route_name = "unauthorized";
-    return error(401, "this server needs a token: send \"Authorization: Bearer TOKEN\"");
+    return respond(error(401, "this server needs a token: send \"Authorization: Bearer TOKEN\""));
   }
   static const std::map<std::string, std::string> kMethods = {
       {"/api/health", "GET"}, {"/api/pipelines", "GET"}, {"/api/devices", "GET"},
       {"/api/render", "POST"}, {"/metrics", "GET"}};
   if (path == "/api/assets") {
     route_name = path;
-    return assets(request);
+    return respond(assets(request));
   }
   if (path == "/api/bakes" || path.rfind("/api/bakes/", 0) == 0) {
     route_name = "/api/bakes";
-    return bakes(request, path);
+    return respond(bakes(request, path));
   }
   auto it = kMethods.find(path);
   if (it != kMethods.end()) {
     route_name = path;
     if (request.method != it->second)
-      return error(405, request.method + " is not allowed on " + path + ": use " + it->second);
-    if (path == "/api/health") return health();
-    if (path == "/api/pipelines") return json_response({{"pipelines", pipeline_names()}});
-    if (path == "/api/devices") return devices();
-    if (path == "/api/render") return render(request.body);
-    std::string text = metrics_.text(queue_.depth()) +
-                       "# HELP scatter_sessions Live WebSocket sessions.\n# TYPE scatter_sessions gauge\n"
-                       "scatter_sessions " + std::to_string(sessions_.load()) + "\n";
-    text += "# HELP scatter_bakes Bake jobs by state.\n# TYPE scatter_bakes gauge\n";
-    auto counts = bakes_.counts();
-    for (const char* state : {"queued", "running", "done", "failed", "cancelled"}) {
-      text += std::string("scatter_bakes{state=\"") + state + "\"} " + std::to_string(counts[state]) + "\n";
-    }
-    if (BakeCache* cache = queue_.cache()) {
-      CacheStats c = cache->stats();
-      text += "# HELP scatter_bake_cache_lookups_total Bake cache lookups by outcome.\n"
-              "# TYPE scatter_bake_cache_lookups_total counter\n";
-      text += "scatter_bake_cache_lookups_total{result=\"memory_hit\"} " + std::to_string(c.memory_hits) + "\n";
-      text += "scatter_bake_cache_lookups_total{result=\"disk_hit\"} " + std::to_string(c.disk_hits) + "\n";
-      text += "scatter_bake_cache_lookups_total{result=\"miss\"} " + std::to_string(c.misses) + "\n";
-      text += "scatter_bake_cache_lookups_total{result=\"corrupt\"} " + std::to_string(c.corrupt) + "\n";
-    }
-    return {200, "text/plain; version=0.0.4", text, {}};
+      return respond(error(405, request.method + " is not allowed on " + path + ": use " + it->second));
+    if (path == "/api/health") return respond(health());
+    if (path == "/api/pipelines") return respond(json_response({{"pipelines", pipeline_names()}}));
+    if (path == "/api/devices") return devices(respond);
+    if (path == "/api/render") return render(request, respond);
+    return respond(metrics_text());
   }
   // The browser client (web/), compiled into the binary.
   static const std::map<std::string, std::pair<std::string, std::string>> kStatic = {
@@ -121,10 +177,35 @@ HttpResponse Api::route(const HttpRequest& request, std::string& route_name) {
       {"/style.css", {"web/style.css", "text/css; charset=utf-8"}}};
   if (auto s = kStatic.find(path); s != kStatic.end() && request.method == "GET") {
     route_name = "static";
-    return {200, s->second.second, std::string(gpu::embedded_source(s->second.first)), {}};
+    return respond({200, s->second.second, std::string(gpu::embedded_source(s->second.first)), {}});
   }
   route_name = "not_found";
-  return error(404, "no such resource: " + path);
+  respond(error(404, "no such resource: " + path));
+}
+
+HttpResponse Api::metrics_text() {
+  std::string text = metrics_.text(queue_.depth()) +
+                     "# HELP scatter_sessions Live WebSocket sessions.\n# TYPE scatter_sessions gauge\n"
+                     "scatter_sessions " + std::to_string(sessions_.load()) + "\n";
+  text += "# HELP scatter_bakes Bake jobs by state.\n# TYPE scatter_bakes gauge\n";
+  auto counts = bakes_.counts();
+  for (const char* state : {"queued", "running", "done", "failed", "cancelled"})
+    text += std::string("scatter_bakes{state=\"") + state + "\"} " + std::to_string(counts[state]) + "\n";
+  if (BakeCache* cache = queue_.cache()) {
+    CacheStats c = cache->stats();
+    text += "# HELP scatter_bake_cache_lookups_total Bake cache lookups by outcome.\n"
+            "# TYPE scatter_bake_cache_lookups_total counter\n";
+    text += "scatter_bake_cache_lookups_total{result=\"memory_hit\"} " + std::to_string(c.memory_hits) + "\n";
+    text += "scatter_bake_cache_lookups_total{result=\"disk_hit\"} " + std::to_string(c.disk_hits) + "\n";
+    text += "scatter_bake_cache_lookups_total{result=\"miss\"} " + std::to_string(c.misses) + "\n";
+    text += "scatter_bake_cache_lookups_total{result=\"corrupt\"} " + std::to_string(c.corrupt) + "\n";
+  }
+  SceneLibrary::Stats l = scenes_.stats();
+  text += "# HELP scatter_scene_library_scenes Parsed scenes kept for reuse.\n# TYPE scatter_scene_library_scenes gauge\n";
+  text += "scatter_scene_library_scenes " + std::to_string(l.scenes) + "\n";
+  text += "# HELP scatter_scene_loads_total Scenes parsed (library misses).\n# TYPE scatter_scene_loads_total counter\n";
+  text += "scatter_scene_loads_total " + std::to_string(l.loads) + "\n";
+  return {200, "text/plain; version=0.0.4", text, {}};
 }
 
 bool Api::acquire_session() {
@@ -137,11 +218,18 @@ bool Api::acquire_session() {
 void Api::release_session() { --sessions_; }
 
 bool Api::authorized(const HttpRequest& request) const {
-  if (options_.token.empty() || request.authorization == "Bearer " + options_.token) return true;
+  if (options_.token.empty() || same_secret(request.authorization, "Bearer " + options_.token)) return true;
   auto q = request.target.find('?');
   if (q == std::string::npos) return false;
-  std::string query = "&" + request.target.substr(q + 1) + "&";
-  return query.find("&token=" + options_.token + "&") != std::string::npos;
+  std::string_view query = std::string_view(request.target).substr(q + 1);
+  while (!query.empty()) {
+    std::string_view item = query.substr(0, query.find('&'));
+    query.remove_prefix(std::min(query.size(), item.size() + 1));
+    if (item.rfind("token=", 0) != 0) continue;
+    auto value = percent_decode(item.substr(6));
+    if (value && same_secret(*value, options_.token)) return true;
+  }
+  return false;
 }
 
 HttpResponse Api::health() {
@@ -153,8 +241,10 @@ HttpResponse Api::health() {
                         {"sessions", sessions_.load()}});
 }
 
-HttpResponse Api::devices() {
-  auto info = queue_.submit([](RenderQueue::Context& c) {
+void Api::devices(const Respond& respond) {
+  RenderQueue::Job job;
+  job.dropped = [respond](const std::string& why) { respond(error(503, "devices not listed: " + why)); };
+  job.run = [respond](RenderQueue::Context& c) {
     nlohmann::json cl = nlohmann::json::array();
     for (const auto& d : gpu::list_cl_devices())
       cl.push_back({{"id", std::to_string(d.platform) + ":" + std::to_string(d.device)},
@@ -166,13 +256,13 @@ HttpResponse Api::devices() {
     } catch (const gpu::GpuError& e) {
       gl = {{"error", e.what()}};
     }
-    return nlohmann::json{{"opencl", cl}, {"opengl", gl}};
-  });
-  return json_response(info.get());
+    respond(json_response({{"opencl", cl}, {"opengl", gl}}));
+  };
+  if (!queue_.post(std::move(job))) respond(error(503, busy_message(queue_)));
 }
 
 Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& request,
-                                      const ApiOptions& options) {
+                                      const ApiOptions& options, SceneLibrary& library) {
   RenderSpec spec;
   spec.pipeline = r.string("pipeline", "auto");
   spec.terms = r.string("terms", "");
@@ -193,61 +283,78 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
       throw ValidationError("scene_name", "must be the name of a shipped scene (letters, digits, - and _)");
     auto file = options.scenes_dir / (name + ".json");
     if (!std::filesystem::exists(file)) throw ValidationError("scene_name", "no scene named \"" + name + "\"");
-    spec.scene = load_scene(file, limits);
+    try {
+      spec.scene = library.load(file, limits, &spec.scene_load_ms);
+    } catch (const ValidationError&) {
+      throw;
+    } catch (const std::exception& e) {  // a shipped scene that cannot load: the server's problem
+      throw std::runtime_error("scene " + name + " cannot be loaded: " + without_paths(e.what(), options));
+    }
   } else {
     check_file_fields(request["scene"], "scene");
     r.object("scene");  // marks it read; parse_scene validates it
     nlohmann::json scene = request["scene"];
     resolve_assets(scene, "scene", options.assets_dir);
-    spec.scene = parse_scene(scene, options.scenes_dir, limits);
+    try {
+      spec.scene = library.parse(scene, options.scenes_dir, limits, &spec.scene_load_ms);
+    } catch (const ValidationError& e) {
+      throw ValidationError(e.field(), without_paths(std::string(e.what()).substr(e.field().empty() ? 0 : e.field().size() + 2), options));
+    } catch (const std::exception& e) {  // files it names that cannot be read: the request's problem
+      throw ValidationError("scene", without_paths(e.what(), options));
+    }
   }
+  check_pipeline(spec.pipeline, spec.terms);
   return spec;
 }
 
-RenderResult Api::render_on_queue(RenderQueue& queue, Metrics& metrics, const Scene& scene,
-                                  const std::string& pipeline, const std::string& terms,
-                                  const Settings& settings) {
-  auto job = queue.submit([&](RenderQueue::Context& c) {
-    Pipeline& p = c.pipeline(pipeline);
-    RenderRequest req;
-    req.settings = settings;
-    auto ok = p.supported_terms();
-    req.terms = !terms.empty() ? parse_terms(terms)
-                : std::find(ok.begin(), ok.end(), Terms::All) != ok.end() ? Terms::All : ok.front();
-    auto start = std::chrono::steady_clock::now();
-    RenderResult result = p.render(scene, req);
-    double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::vector<std::pair<std::string, double>> stages;
-    for (const auto& t : result.timings) stages.emplace_back(t.stage, t.ms / 1000);
-    metrics.observe_render(p.name(), seconds, stages);
-    return result;
-  });
-  return job.get();
+void Api::check_pipeline(const std::string& pipeline, const std::string& terms) {
+  auto names = pipeline_names();
+  if (std::find(names.begin(), names.end(), pipeline) == names.end()) {
+    gpu::Gpu unused;  // make_pipeline names the known ones in its error
+    make_pipeline(pipeline, unused);
+  }
+  if (terms.empty()) return;
+  Terms t = parse_terms(terms);
+  gpu::Gpu unused;  // contexts are made on first use; constructing a pipeline makes none
+  require_terms(*make_pipeline(pipeline, unused), t);
 }
 
-HttpResponse Api::render(const std::string& body) {
-  nlohmann::json request = nlohmann::json::parse(body, nullptr, false);
-  if (request.is_discarded()) throw ValidationError("body", "is not valid JSON");
+void Api::render(const HttpRequest& http, const Respond& respond) {
+  nlohmann::json request = parse_json(http.body, "body");
   JsonObject r(request, "");
-  RenderSpec spec = read_render_spec(r, request, options_);
+  RenderSpec spec = read_render_spec(r, request, options_, scenes_);
   r.finish();
-  RenderResult result = render_on_queue(queue_, metrics_, spec.scene, spec.pipeline, spec.terms, spec.settings);
-  const std::string& format = spec.format;
-  const double exposure = spec.exposure;
-
-  nlohmann::json timings = nlohmann::json::object();
-  for (const auto& t : result.timings) timings[t.stage] = t.ms;
-  nlohmann::json plan = result.plan;
-  if (format == "json")
-    return json_response({{"pipeline", result.plan.pipeline}, {"plan", plan}, {"timings_ms", timings},
-                          {"width", result.image.width}, {"height", result.image.height}});
-  // Encoding runs here, on the network thread, not on the render thread.
-  HttpResponse response{200, format == "exr" ? "image/x-exr" : (format == "png" ? "image/png" : "image/jpeg"),
-                        encode_image(result.image, format, ToneMap{exposure}), {}};
-  response.headers = {{"X-Scatter-Pipeline", result.plan.pipeline},
-                      {"X-Scatter-Plan", plan.dump()},
-                      {"X-Scatter-Timings", timings.dump()}};
-  return response;
+  check_cost(options_, spec.pipeline, *spec.scene, spec.terms, spec.settings, false);
+  FrameSpec frame;
+  frame.scene = spec.scene;
+  frame.pipeline = spec.pipeline;
+  frame.terms = spec.terms;
+  frame.settings = spec.settings;
+  frame.scene_load_ms = spec.scene_load_ms;
+  frame.max_seconds = options_.max_render_s;
+  auto cancel = http.cancel ? http.cancel : std::make_shared<CancelToken>();
+  bool queued = post_render(queue_, metrics_, std::move(frame), cancel,
+                            [this, respond, format = spec.format, exposure = spec.exposure](RenderOutcome o) {
+    if (!o.result) return respond(error(o.status, without_paths(o.error, options_), o.field));
+    // Encoded off the render thread.
+    offload_([o = std::move(o), respond, format, exposure]() mutable {
+      RenderResult& result = *o.result;
+      nlohmann::json timings = nlohmann::json::object();
+      for (const auto& t : result.timings) timings[t.stage] = t.ms;
+      timings["queue_wait"] = o.wait_ms;
+      nlohmann::json plan = result.plan;
+      if (format == "json")
+        return respond(json_response({{"pipeline", result.plan.pipeline}, {"plan", plan}, {"timings_ms", timings},
+                                      {"width", result.image.width}, {"height", result.image.height}}));
+      HttpResponse response{200, format == "exr" ? "image/x-exr" : (format == "png" ? "image/png" : "image/jpeg"),
+                            encode_image(result.image, format, ToneMap{exposure}), {}};
+      response.headers = {{"X-Scatter-Pipeline", result.plan.pipeline},
+                          {"X-Scatter-Plan", plan.dump()},
+                          {"X-Scatter-Timings", timings.dump()}};
+      respond(std::move(response));
+    });
+  });
+  if (!queued) respond(error(503, busy_message(queue_)));
 }
 
 }  // namespace scatter::server

@@ -26,6 +26,8 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -33,7 +35,9 @@
 #include "protocol/json_reader.hpp"
 #include "scene/scene.hpp"
 #include "server/metrics.hpp"
+#include "server/render_job.hpp"
 #include "server/render_queue.hpp"
+#include "server/scene_library.hpp"
 
 namespace scatter::server {
 
@@ -44,6 +48,9 @@ struct ApiOptions {
   size_t max_message_bytes = 64 << 20;  // largest WebSocket message
   int max_sessions = 16;                // live WebSocket sessions at once
   int idle_refine_ms = 200;             // a still view is re-rendered at full size after this
+  double session_idle_s = 120;          // a live session that sends nothing for this long is closed
+  double max_request_mb = 2048;         // estimated host + device memory one render or bake may take
+  double max_render_s = 120;            // estimated (and enforced) seconds one render may take
   std::filesystem::path assets_dir;     // uploaded assets; empty: uploads are refused (503)
 };
 
@@ -52,6 +59,7 @@ struct HttpRequest {
   std::string target;
   std::string body;
   std::string authorization;
+  std::shared_ptr<CancelToken> cancel;  // set by the connection: cancelled when the client goes
 };
 
 struct HttpResponse {
@@ -63,10 +71,24 @@ struct HttpResponse {
 
 class Api {
  public:
-  Api(ApiOptions options, RenderQueue& queue, Metrics& metrics);
+  using Respond = std::function<void(HttpResponse)>;
+  // Runs a piece of CPU work (image encoding) somewhere other than the render thread.
+  using Offload = std::function<void(std::function<void()>)>;
+
+  // `bakes`: the queue bake jobs run on (null: the render queue). `offload`: where encoding runs
+  // (empty: inline, on the render thread's callback).
+  Api(ApiOptions options, RenderQueue& queue, Metrics& metrics, RenderQueue* bakes = nullptr,
+      Offload offload = {});
+  // Answers `request` through `respond`, exactly once, and never waits on the render thread:
+  // routes that render queue a job and respond from its completion.
+  void handle(const HttpRequest& request, Respond respond);
+  // Waits for the answer: for tests and tools, never for the daemon's threads.
   HttpResponse handle(const HttpRequest& request);
-  // Whether the request carries the token (header "Authorization: Bearer T", or "?token=T" for
-  // WebSocket clients, which cannot set headers); true when no token is set.
+  // Requests answered from memory at once (health, metrics, pipelines, bake status, asset list,
+  // the web client): a network thread may run them inline.
+  static bool quick(const HttpRequest& request);
+  // Whether the request carries the token (header "Authorization: Bearer T", or "?token=T",
+  // percent-decoded, for WebSocket clients, which cannot set headers); true when no token is set.
   bool authorized(const HttpRequest& request) const;
 
   // Takes a live-session slot; false when --max-sessions are in use. release_session() gives it back.
@@ -77,40 +99,51 @@ class Api {
   RenderQueue& queue() { return queue_; }
   Metrics& metrics() { return metrics_; }
   const ApiOptions& options() const { return options_; }
+  SceneLibrary& scenes() { return scenes_; }
+  // Cancels every bake job (shutdown).
+  void cancel_bakes();
 
   static HttpResponse error(int status, const std::string& message, const std::string& field = "");
 
   // What a render request asks for; shared by POST /api/render and WebSocket hello messages.
   struct RenderSpec {
-    Scene scene;
+    std::shared_ptr<const Scene> scene;
     std::string pipeline = "auto", terms, format = "png";
     Settings settings;
     double exposure = 1.0;
+    double scene_load_ms = 0;  // > 0 when this request loaded the scene (not a library hit)
   };
   // Reads the fields of `r` (an object over `json`): scene or scene_name, pipeline, terms, format,
   // settings, exposure. Leaves other fields for the caller; throws ValidationError. An inline
-  // scene's "asset" fields become the uploaded files' paths.
-  static RenderSpec read_render_spec(JsonObject& r, const nlohmann::json& json, const ApiOptions& options);
-  // Renders on the render thread and records the metrics; waits for the result.
-  static RenderResult render_on_queue(RenderQueue& queue, Metrics& metrics, const Scene& scene,
-                                      const std::string& pipeline, const std::string& terms,
-                                      const Settings& settings);
+  // scene's "asset" fields become the uploaded files' paths; shipped scenes come from `library`.
+  static RenderSpec read_render_spec(JsonObject& r, const nlohmann::json& json, const ApiOptions& options,
+                                     SceneLibrary& library);
+  // Throws ValidationError for an unknown pipeline or terms it cannot render; needs no GPU.
+  static void check_pipeline(const std::string& pipeline, const std::string& terms);
+  // Throws RequestTooCostly (413) when rendering (or baking) `scene` as asked is estimated past
+  // --max-request-mb or --max-render-s; the message names the field and the limit.
+  static void check_cost(const ApiOptions& options, const std::string& pipeline, const Scene& scene,
+                         const std::string& terms, const Settings& settings, bool bake);
 
  private:
-  HttpResponse route(const HttpRequest& request, std::string& route_name);
+  void route(const HttpRequest& request, std::string& route_name, const Respond& respond);
   HttpResponse health();
-  HttpResponse devices();
-  HttpResponse render(const std::string& body);
+  HttpResponse metrics_text();
+  void devices(const Respond& respond);
+  void render(const HttpRequest& request, const Respond& respond);
   HttpResponse bakes(const HttpRequest& request, const std::string& path);
   HttpResponse assets(const HttpRequest& request);
   HttpResponse create_bake(const std::string& body);
 
   ApiOptions options_;
   RenderQueue& queue_;
+  RenderQueue& bake_queue_;
   Metrics& metrics_;
+  Offload offload_;
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
   std::atomic<int> sessions_{0};
   BakeJobs bakes_;
+  SceneLibrary scenes_;
 };
 
 }  // namespace scatter::server

@@ -24,11 +24,10 @@ nlohmann::json bake_identity(const nlohmann::json& scene) {
 }  // namespace
 
 HttpResponse Api::create_bake(const std::string& body) {
-  nlohmann::json request = nlohmann::json::parse(body, nullptr, false);
-  if (request.is_discarded()) throw ValidationError("body", "is not valid JSON");
+  nlohmann::json request = parse_json(body, "body");
   if (request.is_object() && !request.contains("pipeline")) request["pipeline"] = "single";
   JsonObject r(request, "");
-  RenderSpec spec = read_render_spec(r, request, options_);
+  RenderSpec spec = read_render_spec(r, request, options_, scenes_);
   r.finish();
   // The scene's JSON, for the job's identity.
   nlohmann::json scene_json;
@@ -38,24 +37,28 @@ HttpResponse Api::create_bake(const std::string& body) {
     std::ifstream in(options_.scenes_dir / (request["scene_name"].get<std::string>() + ".json"));
     scene_json = nlohmann::json::parse(in, nullptr, false);
   }
-  auto scene = std::make_shared<const Scene>(std::move(spec.scene));
+  std::shared_ptr<const Scene> scene = spec.scene;
   const std::string pipeline = spec.pipeline;
   const Settings settings = spec.settings;
-  // Checked here on the network thread with a pipeline of its own (plan() needs no GPU), so that a
-  // typo is a 400 and a POST never waits behind a running bake on the render thread.
+  // Checked here with a pipeline of its own (constructing one makes no GPU context), so that a
+  // typo is a 400 at once and a POST never waits behind a running bake. Whether it bakes at all
+  // is known before plan(), which for some pipelines voxelizes.
   std::vector<std::pair<std::string, double>> stages;
   {
-    gpu::Gpu unused;  // contexts are made on first use, and plan() makes none
+    gpu::Gpu unused;
     auto p = make_pipeline(pipeline, unused);
-    p->plan(*scene, {p->supported_terms().front(), settings, nullptr});
     stages = p->bake_stages();
+    if (stages.empty()) throw ValidationError("pipeline", "pipeline " + pipeline + " needs no bake");
+    p->plan(*scene, {p->supported_terms().front(), settings, nullptr});
   }
-  if (stages.empty()) throw ValidationError("pipeline", "pipeline " + pipeline + " needs no bake");
+  check_cost(options_, pipeline, *scene, "", settings, true);
   nlohmann::json identity = {{"pipeline", pipeline}, {"settings", settings}, {"scene", bake_identity(scene_json)}};
   bool created = false;
   auto job = bakes_.submit(identity.dump(), pipeline, stages, [&](std::shared_ptr<BakeJob> j) {
     spdlog::info("event=bake_queued id={} pipeline={}", j->id(), pipeline);
-    queue_.submit([j, scene, pipeline, settings](RenderQueue::Context& c) {
+    RenderQueue::Job work;
+    // On the bake queue's own thread and GPU contexts: live sessions' frames do not wait for it.
+    work.run = [j, scene, pipeline, settings](RenderQueue::Context& c) {
       j->run([&](const BakeProgress& progress) {
         Pipeline& p = c.pipeline(pipeline);
         return p.bake(*scene, {p.supported_terms().front(), settings, nullptr}, progress);
@@ -63,8 +66,16 @@ HttpResponse Api::create_bake(const std::string& body) {
       nlohmann::json s = j->status();
       spdlog::info("event=bake_finished id={} state={} cache_hit={} seconds={}", j->id(), s["state"].get<std::string>(),
                    s.value("cache_hit", false), s.value("seconds", 0.0));
-      return 0;
-    });
+    };
+    work.dropped = [j](const std::string& why) {
+      j->cancel();
+      j->run([](const BakeProgress&) -> BakeResult { throw BakeCancelled(); });  // records it as cancelled
+      spdlog::info("event=bake_dropped id={} reason=\"{}\"", j->id(), why);
+    };
+    if (!bake_queue_.post(std::move(work))) {
+      j->cancel();
+      throw BakeJobs::Busy();
+    }
   }, &created);
   HttpResponse response = json_response(job->status(), created ? 202 : 200);
   response.headers.push_back({"Location", "/api/bakes/" + job->id()});

@@ -1,9 +1,15 @@
-// One HTTP connection: reads requests (with a body limit and a timeout), hands them to the Api on
-// a worker thread so that a render does not block other connections' I/O, and writes responses.
+// One HTTP connection: reads requests (with header and body limits and a timeout), answers quick
+// ones (health, metrics, status) on its own strand at once, hands the others to the worker pool
+// (uploads to check, scenes to parse) from where renders are queued on the render thread, and
+// writes each response from the connection's strand. No thread waits for a render.
+//
+// While a request is being served the connection watches its socket: a client that hangs up
+// cancels its render (bytes that arrive meanwhile, a pipelined request, are kept for the parser).
 #pragma once
 
 #include <boost/asio.hpp>
 #include <boost/beast.hpp>
+#include <functional>
 #include <memory>
 
 #include "server/api.hpp"
@@ -22,6 +28,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
  private:
   void do_read();
   void on_read(beast::error_code ec, size_t bytes);
+  void watch();
+  void on_watch(beast::error_code ec, size_t bytes);
   void send(http::response<http::string_body>&& response);
   void on_write(bool keep_alive, beast::error_code ec, size_t bytes);
   void do_drain();
@@ -34,6 +42,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   size_t body_limit_;
   std::shared_ptr<http::response<http::string_body>> response_;
   std::vector<char> drain_;
+  std::shared_ptr<CancelToken> cancel_;  // the request being served
+  bool watching_ = false;
+  std::function<void()> after_watch_;  // what on_write would have done, once the watch has ended
 };
 
 }  // namespace scatter::server

@@ -25,6 +25,11 @@ void Metrics::count_request(const std::string& route, int status) {
   ++requests_[{route, status}];
 }
 
+void Metrics::count_cancelled() {
+  std::lock_guard lock(mutex_);
+  ++cancelled_;
+}
+
 void Metrics::observe_render(const std::string& pipeline, double seconds,
                              const std::vector<std::pair<std::string, double>>& stages) {
   std::lock_guard lock(mutex_);
@@ -61,6 +66,9 @@ std::string Metrics::text(size_t queue_depth) const {
   out += "# TYPE scatter_stage_seconds histogram\n";
   for (const auto& [key, h] : stages_)
     print(out, "scatter_stage_seconds", "pipeline=\"" + key.first + "\",stage=\"" + key.second + "\"", h);
+  out += "# HELP scatter_renders_cancelled_total Renders dropped or stopped: client gone, shutdown, time limit.\n";
+  out += "# TYPE scatter_renders_cancelled_total counter\n";
+  out += "scatter_renders_cancelled_total " + std::to_string(cancelled_) + "\n";
   out += "# HELP scatter_render_queue_depth Jobs waiting for the render thread.\n";
   out += "# TYPE scatter_render_queue_depth gauge\n";
   out += "scatter_render_queue_depth " + std::to_string(queue_depth) + "\n";

@@ -14,6 +14,8 @@ class Metrics {
   // A finished render: total seconds and seconds per stage.
   void observe_render(const std::string& pipeline, double seconds,
                       const std::vector<std::pair<std::string, double>>& stages);
+  // A render dropped before it ran or stopped while running (client gone, shutdown, time limit).
+  void count_cancelled();
   // Prometheus text exposition; `queue_depth` is sampled by the caller.
   std::string text(size_t queue_depth) const;
 
@@ -30,6 +32,7 @@ class Metrics {
 
   mutable std::mutex mutex_;
   std::map<std::pair<std::string, int>, long long> requests_;
+  long long cancelled_ = 0;
   std::map<std::string, Histogram> frames_;                             // by pipeline
   std::map<std::pair<std::string, std::string>, Histogram> stages_;     // by pipeline, stage
 };

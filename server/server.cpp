@@ -11,13 +11,14 @@ Server::Server(ServerOptions options)
         if (!options.cache) options.cache = std::make_shared<BakeCache>();
         return std::move(options);
       }()),
-      queue_(options_.gpu, options_.cache.get()),
+      workers_(static_cast<size_t>(std::max(1, options_.workers))),
+      queue_(options_.gpu, options_.cache.get(), options_.max_queue, "render"),
+      bake_queue_(options_.gpu, options_.cache.get(), BakeJobs::kMaxActive, "bake"),
       api_([&] {
         ApiOptions a = options_.api;
         a.max_message_bytes = options_.max_upload_mb << 20;
         return a;
-      }(), queue_, metrics_),
-      workers_(static_cast<size_t>(std::max(1, options_.workers))),
+      }(), queue_, metrics_, &bake_queue_, [this](std::function<void()> f) { boost::asio::post(workers_, std::move(f)); }),
       acceptor_(io_) {
   boost::system::error_code ec;
   auto address = boost::asio::ip::make_address(options_.bind, ec);
@@ -36,7 +37,19 @@ Server::Server(ServerOptions options)
 
 Server::~Server() {
   stop();
+  // The queues' threads first (their callbacks reach the Api, the workers and io_), then the
+  // workers' encodes; io_ and its sessions go last, with the members.
+  queue_.stop("the server is stopping");
+  bake_queue_.stop("the server is stopping");
+  wait_stopped(std::chrono::hours(24));
   workers_.join();
+}
+
+bool Server::wait_stopped(std::chrono::milliseconds timeout) {
+  auto until = std::chrono::steady_clock::now() + timeout;
+  bool render = queue_.wait_stopped(timeout);
+  auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now());
+  return bake_queue_.wait_stopped(std::max(left, std::chrono::milliseconds(0))) && render;
 }
 
 void Server::do_accept() {
@@ -67,6 +80,11 @@ void Server::run(bool handle_signals) {
 }
 
 void Server::stop() {
+  // Cancelled now, not behind the I/O: queued work is dropped and the running job stops at its
+  // next check.
+  api_.cancel_bakes();
+  queue_.stop("the server is stopping");
+  bake_queue_.stop("the server is stopping");
   boost::asio::post(io_, [this] {
     boost::system::error_code ec;
     acceptor_.close(ec);

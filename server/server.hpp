@@ -1,5 +1,7 @@
-// The daemon: listens on one port, serves the Api over HTTP; one render thread (RenderQueue)
-// owns the GPU; Asio threads do the I/O; a small worker pool runs request handlers.
+// The daemon: listens on one port, serves the Api over HTTP and WebSocket. Two GPU-owning threads
+// (RenderQueue): one renders frames and one-shot renders, one bakes, each with its own OpenCL and
+// EGL contexts, so a bake never holds a live session's frame. Asio threads do the I/O; a small
+// worker pool parses requests and encodes images. No thread waits on another's result.
 #pragma once
 
 #include <boost/asio.hpp>
@@ -18,6 +20,7 @@ struct ServerOptions {
   size_t max_upload_mb = 64;
   int io_threads = 2;
   int workers = 4;
+  size_t max_queue = 64;  // renders waiting for the render thread (REST; each live session adds one)
   ApiOptions api;
   gpu::GpuOptions gpu;
   std::shared_ptr<BakeCache> cache;  // bake products; null: a memory-only cache
@@ -27,21 +30,27 @@ class Server {
  public:
   // Binds and starts listening; throws std::runtime_error if the address cannot be bound.
   explicit Server(ServerOptions options);
-  ~Server();
+  ~Server();  // stops, waits for the running render and bake (however long), joins every thread
   unsigned short port() const { return port_; }
   // Serves until stop() (or SIGINT/SIGTERM when `handle_signals`).
   void run(bool handle_signals);
+  // Stops accepting, drops queued renders and bakes, cancels the running ones, ends run().
   void stop();
+  // After run() returned: waits up to `timeout` for the render and bake threads to finish their
+  // cancelled jobs; false if one is still busy (a pipeline step that cannot be interrupted).
+  bool wait_stopped(std::chrono::milliseconds timeout);
 
  private:
   void do_accept();
 
   ServerOptions options_;
-  RenderQueue queue_;
+  boost::asio::thread_pool workers_;
+  RenderQueue queue_, bake_queue_;
   Metrics metrics_;
   Api api_;
+  // After the Api: destroyed before it, with the sessions its unrun handlers hold (they give
+  // their slots back to the Api). ~Server has stopped every thread that posts here by then.
   boost::asio::io_context io_;
-  boost::asio::thread_pool workers_;
   boost::asio::ip::tcp::acceptor acceptor_;
   unsigned short port_ = 0;
 };

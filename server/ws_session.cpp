@@ -16,16 +16,51 @@ WsSession::WsSession(boost::asio::ip::tcp::socket&& socket, Api& api, boost::asi
       metrics_(api.metrics()),
       workers_(workers),
       options_(api.options()),
-      refine_timer_(ws_.get_executor()) {}
+      refine_timer_(ws_.get_executor()),
+      idle_timer_(ws_.get_executor()) {}
 
-WsSession::~WsSession() { api_.release_session(); }
+WsSession::~WsSession() {
+  if (cancel_) cancel_->cancel("the client left");
+  api_.release_session();
+}
 
 void WsSession::run(beast::http::request<beast::http::string_body> upgrade) {
   ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
   ws_.read_message_max(options_.max_message_bytes);
+  last_message_ = std::chrono::steady_clock::now();
   ws_.async_accept(upgrade, [self = shared_from_this()](beast::error_code ec) {
     if (ec) return;
+    self->watch_idle();
     self->do_read();
+  });
+}
+
+void WsSession::end(const std::string& why) {
+  if (closed_) return;
+  closed_ = true;
+  if (cancel_) cancel_->cancel(why);
+  refine_timer_.cancel();
+  idle_timer_.cancel();
+  spdlog::info("event=session_end reason=\"{}\"", why);
+  if (!writes_.empty()) {  // a write is pending, and a close is a write too: drop the connection
+    beast::error_code ec;
+    beast::get_lowest_layer(ws_).socket().close(ec);
+    return;
+  }
+  ws_.async_close(websocket::close_reason(websocket::close_code::policy_error, why),
+                  [self = shared_from_this()](beast::error_code) {});
+}
+
+// A session that says nothing for --session-idle-s (no pose, ack or ping) gives its slot back.
+void WsSession::watch_idle() {
+  auto idle = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options_.session_idle_s));
+  idle_timer_.expires_at(last_message_ + idle);
+  idle_timer_.async_wait([self = shared_from_this(), idle](boost::system::error_code ec) {
+    if (ec || self->closed_) return;
+    if (std::chrono::steady_clock::now() - self->last_message_ >= idle)
+      return self->end("idle: no message for " + short_number(self->options_.session_idle_s) + " s (--session-idle-s)");
+    self->watch_idle();
   });
 }
 
@@ -34,12 +69,27 @@ void WsSession::do_read() {
 }
 
 void WsSession::on_read(beast::error_code ec, size_t) {
-  if (ec) {  // closed, reset or too large: the session ends; a frame in flight is simply dropped
+  if (ec) {  // closed, reset or too large: the session ends, and so does its frame in flight
     closed_ = true;
+    if (cancel_) cancel_->cancel("the client left");
+    refine_timer_.cancel();
+    idle_timer_.cancel();
     return;
   }
+  last_message_ = std::chrono::steady_clock::now();
   std::string text = beast::buffers_to_string(buffer_.data());
   buffer_.consume(buffer_.size());
+  dispatch(std::move(text));
+  if (!closed_) do_read();
+}
+
+void WsSession::dispatch(std::string text) {
+  if (hello_pending_) {  // in order, after the hello being read
+    if (backlog_.size() >= kMaxBacklog)
+      return send_error("too many messages while the scene loads (" + std::to_string(kMaxBacklog) + ")", "type");
+    backlog_.push_back(std::move(text));
+    return;
+  }
   try {
     handle(text);
   } catch (const ValidationError& e) {
@@ -47,7 +97,58 @@ void WsSession::on_read(beast::error_code ec, size_t) {
   } catch (const std::exception& e) {
     send_error(e.what(), "");
   }
-  do_read();
+}
+
+// Reading a hello loads its scene (the first time, an import of seconds): on the worker pool,
+// then applied here; messages that come meanwhile wait in the backlog.
+void WsSession::read_hello(nlohmann::json msg) {
+  hello_pending_ = true;
+  boost::asio::post(workers_, [self = shared_from_this(), msg = std::move(msg)] {
+    std::optional<Api::RenderSpec> spec;
+    std::string error, field;
+    try {
+      JsonObject m(msg, "");
+      m.string("type", std::nullopt);
+      spec = Api::read_render_spec(m, msg, self->options_, self->api_.scenes());
+      m.finish();
+      Api::check_cost(self->options_, spec->pipeline, *spec->scene, spec->terms, spec->settings, false);
+    } catch (const ValidationError& e) {
+      spec.reset();
+      error = e.what();
+      field = e.field();
+    } catch (const std::exception& e) {
+      spec.reset();
+      error = e.what();
+    }
+    boost::asio::post(self->ws_.get_executor(), [self, spec = std::move(spec), error, field]() mutable {
+      self->hello_pending_ = false;
+      if (self->closed_) return;
+      if (spec) {
+        self->apply_hello(std::move(*spec));
+      } else {
+        self->send_error(error, field);
+      }
+      while (!self->backlog_.empty() && !self->hello_pending_) {
+        std::string next = std::move(self->backlog_.front());
+        self->backlog_.pop_front();
+        self->dispatch(std::move(next));
+      }
+    });
+  });
+}
+
+void WsSession::apply_hello(Api::RenderSpec spec) {
+  scene_ = spec.scene;
+  scene_load_ms_ = spec.scene_load_ms;
+  camera_ = scene_->camera;
+  lights_ = scene_->lights;
+  pipeline_ = spec.pipeline;
+  terms_ = spec.terms;
+  format_ = spec.format == "json" ? "jpg" : spec.format;
+  settings_ = spec.settings;
+  dirty_ = true;
+  interactive_ = false;
+  maybe_render();
 }
 
 void WsSession::send_error(const std::string& error, const std::string& field) {
@@ -57,22 +158,11 @@ void WsSession::send_error(const std::string& error, const std::string& field) {
 }
 
 void WsSession::handle(const std::string& text) {
-  nlohmann::json msg = nlohmann::json::parse(text, nullptr, false);
-  if (msg.is_discarded()) throw ValidationError("message", "is not valid JSON");
+  nlohmann::json msg = parse_json(text, "message");
   JsonObject m(msg, "");
-  std::string type = m.choice("type", {"hello", "camera", "lights", "ack"}, std::nullopt);
+  std::string type = m.choice("type", {"hello", "camera", "lights", "ack", "ping"}, std::nullopt);
   if (type == "hello") {
-    Api::RenderSpec spec = Api::read_render_spec(m, msg, options_);
-    m.finish();
-    scene_ = std::make_shared<const Scene>(std::move(spec.scene));
-    camera_ = scene_->camera;
-    lights_ = scene_->lights;
-    pipeline_ = spec.pipeline;
-    terms_ = spec.terms;
-    format_ = spec.format == "json" ? "jpg" : spec.format;
-    settings_ = spec.settings;
-    dirty_ = true;
-    interactive_ = false;
+    return read_hello(std::move(msg));
   } else if (type == "camera") {
     if (!scene_) throw ValidationError("type", "send hello first");
     Camera c = camera_;
@@ -95,16 +185,28 @@ void WsSession::handle(const std::string& text) {
     long long rev = static_cast<long long>(m.number("revision", double(light_revision_ + 1), {0, 9e15}));
     m.array("lights", 0, 16);
     m.finish();
-    lights_ = parse_lights(msg["lights"], "lights");
+    std::vector<Light> lights = parse_lights(msg["lights"], "lights");
+    Scene lit = *scene_;  // the cost depends on the number of lights (the mesh is shared)
+    lit.lights = lights;
+    Api::check_cost(options_, pipeline_, lit, terms_, settings_, false);
+    lights_ = std::move(lights);
     light_revision_ = rev;
     dirty_ = true;
     interactive_ = true;
     last_change_ = std::chrono::steady_clock::now();
-  } else {
-    m.integer("frame", std::nullopt, {0, 2e9});
+  } else if (type == "ack") {
+    long long frame = m.integer("frame", std::nullopt, {0, 2e9});
     m.finish();
-    in_flight_ = false;
+    // Only the frame in flight, once it was sent, can be acked: an ack for any other frame (one
+    // never received, or acked twice) would let a client queue renders without reading them.
+    if (!awaiting_ack_ || frame != in_flight_) return;
+    awaiting_ack_ = false;
+    in_flight_ = 0;
     schedule_refine();
+  } else {
+    m.finish();
+    send(nlohmann::json{{"type", "pong"}}.dump(), false);
+    return;
   }
   maybe_render();
 }
@@ -116,7 +218,7 @@ void WsSession::schedule_refine() {
   refine_timer_.expires_after(std::max(std::chrono::steady_clock::duration::zero(),
                                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(wait)));
   refine_timer_.async_wait([self = shared_from_this()](boost::system::error_code ec) {
-    if (ec || self->closed_ || self->dirty_ || !self->last_frame_reduced_) return;
+    if (ec || self->closed_ || self->dirty_ || !self->last_frame_reduced_ || self->in_flight_) return;
     if (std::chrono::steady_clock::now() - self->last_change_ <
         std::chrono::milliseconds(self->options_.idle_refine_ms))
       return self->schedule_refine();  // moved again meanwhile
@@ -129,51 +231,84 @@ void WsSession::schedule_refine() {
 void WsSession::maybe_render() {
   if (!dirty_ || in_flight_ || closed_ || !scene_) return;
   dirty_ = false;
-  in_flight_ = true;
-  // Everything the frame needs, copied now: later messages cannot change it (latest wins at the
-  // start of each frame, never in the middle).
-  auto scene = std::make_shared<Scene>(*scene_);
-  scene->camera = camera_;
-  scene->lights = lights_;
+  // Everything the frame needs, taken now: later messages cannot change it (latest wins at the
+  // start of each frame, never in the middle). The scene itself is shared, not copied.
+  FrameSpec f;
+  f.scene = scene_;
+  f.camera = camera_;
+  f.lights = lights_;
   bool reduced = interactive_;
   if (reduced) {  // cheaper while the user interacts
-    scene->width = std::max(1, scene->width / 2);
-    scene->height = std::max(1, scene->height / 2);
+    f.width = std::max(1, scene_->width / 2);
+    f.height = std::max(1, scene_->height / 2);
   }
+  f.pipeline = pipeline_;
+  f.terms = terms_;
+  f.settings = settings_;
+  f.scene_load_ms = std::exchange(scene_load_ms_, 0);
+  f.max_seconds = options_.max_render_s;
   last_frame_reduced_ = reduced;
-  long long frame = next_frame_++, cam_rev = camera_revision_, light_rev = light_revision_;
-  std::string pipeline = pipeline_, terms = terms_, format = format_;
-  Settings settings = settings_;
-  boost::asio::post(workers_, [self = shared_from_this(), scene, frame, cam_rev, light_rev, pipeline,
-                               terms, format, settings, reduced] {
+  long long frame = next_frame_++;
+  in_flight_ = frame;
+  frame_camera_revision_ = camera_revision_;
+  frame_light_revision_ = light_revision_;
+  awaiting_ack_ = false;
+  cancel_ = std::make_shared<CancelToken>();
+  auto self = shared_from_this();
+  // Runs on the render thread: hand the result to this session's strand at once.
+  bool queued = post_render(queue_, metrics_, std::move(f), cancel_, [self, frame, reduced](RenderOutcome o) {
+    boost::asio::post(self->ws_.get_executor(), [self, frame, reduced, o = std::move(o)]() mutable {
+      self->on_rendered(frame, reduced, std::move(o));
+    });
+  }, /*bypass_limit=*/true);
+  if (!queued) on_rendered(frame, reduced, RenderOutcome{std::nullopt, 503, "the server is stopping", "", 0});
+}
+
+void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
+  if (closed_ || frame != in_flight_) return;  // the client left meanwhile: nothing to send
+  if (!o.result) {
+    in_flight_ = 0;  // no frame to ack
+    nlohmann::json e = {{"type", "error"}, {"error", o.error}, {"frame", frame}};
+    if (!o.field.empty()) e["field"] = o.field;
+    send(e.dump(), false);
+    return;
+  }
+  // Encoded on the worker pool, then sent from this strand.
+  boost::asio::post(workers_, [self = shared_from_this(), frame, reduced, o = std::move(o), format = format_,
+                               cam_rev = frame_camera_revision_, light_rev = frame_light_revision_]() mutable {
+    RenderResult& r = *o.result;
+    nlohmann::json timings = nlohmann::json::object();
+    for (const auto& t : r.timings) timings[t.stage] = t.ms;
+    timings["queue_wait"] = o.wait_ms;
     nlohmann::json header;
     std::string bytes;
     try {
-      RenderResult r = Api::render_on_queue(self->queue_, self->metrics_, *scene, pipeline, terms, settings);
-      nlohmann::json timings = nlohmann::json::object();
-      for (const auto& t : r.timings) timings[t.stage] = t.ms;
-      header = {{"type", "frame"}, {"frame", frame}, {"camera_revision", cam_rev},
-                {"light_revision", light_rev}, {"pipeline", r.plan.pipeline}, {"plan", r.plan},
+      header = {{"type", "frame"}, {"frame", frame}, {"camera_revision", cam_rev}, {"light_revision", light_rev},
+                {"pipeline", r.plan.pipeline}, {"plan", r.plan},
                 {"timings_ms", timings}, {"width", r.image.width}, {"height", r.image.height},
                 {"format", format}, {"reduced", reduced}};
-      bytes = encode_image(r.image, format);  // encoded here, off the render thread
+      bytes = encode_image(r.image, format);
     } catch (const std::exception& e) {
       header = {{"type", "error"}, {"error", e.what()}, {"frame", frame}};
     }
-    boost::asio::post(self->ws_.get_executor(), [self, header, bytes = std::move(bytes)]() mutable {
-      if (self->closed_) return;  // the client left mid-frame: nothing to send, nothing to undo
-      bool ok = header["type"] == "frame";
-      self->send(header.dump(), false);
-      if (ok) {
-        self->send(std::move(bytes), true);
-      } else {
-        self->in_flight_ = false;  // no frame to ack
+    boost::asio::post(self->ws_.get_executor(), [self, frame, header = std::move(header), bytes = std::move(bytes)]() mutable {
+      if (self->closed_ || frame != self->in_flight_) return;
+      if (header["type"] != "frame") {
+        self->in_flight_ = 0;
+        self->send(header.dump(), false);
+        return self->maybe_render();
       }
+      self->send(header.dump(), false);
+      self->send(std::move(bytes), true);
+      self->awaiting_ack_ = true;
     });
   });
 }
 
 void WsSession::send(std::string message, bool binary) {
+  if (closed_) return;
+  if (writes_.size() >= kMaxQueuedWrites)
+    return end("the client does not read its messages (" + std::to_string(kMaxQueuedWrites) + " unsent)");
   writes_.emplace_back(std::make_shared<const std::string>(std::move(message)), binary);
   if (writes_.size() == 1) do_write();
 }
@@ -184,11 +319,12 @@ void WsSession::do_write() {
   ws_.async_write(boost::asio::buffer(*message), [self = shared_from_this()](beast::error_code ec, size_t) {
     if (ec) {
       self->closed_ = true;
+      if (self->cancel_) self->cancel_->cancel("the client left");
       self->writes_.clear();
       return;
     }
     self->writes_.pop_front();
-    if (!self->writes_.empty()) self->do_write();
+    if (!self->writes_.empty() && !self->closed_) self->do_write();
   });
 }
 

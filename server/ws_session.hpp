@@ -6,12 +6,20 @@
 //   {"type": "camera", "position": [..], "target": [..], "up": [..], "fov_deg": 40, "revision": n}
 //   {"type": "lights", "lights": [...], "revision": n}
 //   {"type": "ack", "frame": id}
+//   {"type": "ping"}                      keeps a still session alive; answered {"type": "pong"}
 //
 // Latest wins: camera and light messages only replace the session's state; a frame renders the
-// newest state when it starts, so stale poses are never rendered. At most one frame is in flight
-// until the client acks it. While poses keep coming frames are rendered at half size; after
-// ~200 ms without a change a full-size frame refines the still view (header "reduced": false). Each session has at most one job on the render thread's FIFO queue, so
-// sessions take turns. A bad message gets {"type": "error", "error", "field"}; the connection stays.
+// newest state when it starts, so stale poses are never rendered. At most one frame is in flight:
+// from the moment it is queued until the client acks it, and an ack counts only for that frame.
+// While poses keep coming frames are rendered at half size; after ~200 ms without a change a
+// full-size frame refines the still view (header "reduced": false). Each session has at most one
+// job on the render thread's FIFO queue, so sessions take turns. The render thread posts the
+// result here; it is encoded on the worker pool and sent from this session's strand.
+//
+// Bounded: a client that does not read its messages (more than kMaxQueuedWrites unsent) is
+// disconnected; one that sends nothing for --session-idle-s gives its slot back. A bad message
+// gets {"type": "error", "error", "field"}; the connection stays. A client that leaves cancels
+// its frame in flight.
 #pragma once
 
 #include <boost/asio.hpp>
@@ -28,6 +36,9 @@ namespace scatter::server {
 
 class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
+  static constexpr size_t kMaxQueuedWrites = 32;
+  static constexpr size_t kMaxBacklog = 64;  // messages held while a hello's scene loads
+
   // Holds one of the Api's session slots (taken by the caller) and gives it back when it ends.
   WsSession(boost::asio::ip::tcp::socket&& socket, Api& api, boost::asio::thread_pool& workers);
   ~WsSession();
@@ -36,12 +47,18 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
  private:
   void do_read();
   void on_read(boost::beast::error_code ec, size_t bytes);
+  void dispatch(std::string text);
   void handle(const std::string& text);
+  void read_hello(nlohmann::json msg);
+  void apply_hello(Api::RenderSpec spec);
   void maybe_render();
+  void on_rendered(long long frame, bool reduced, RenderOutcome outcome);
   void send(std::string message, bool binary);
   void do_write();
   void send_error(const std::string& error, const std::string& field);
   void schedule_refine();
+  void watch_idle();
+  void end(const std::string& why);
 
   boost::beast::websocket::stream<boost::beast::tcp_stream> ws_;
   boost::beast::flat_buffer buffer_;
@@ -52,19 +69,27 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   const ApiOptions& options_;
 
   // Session state; touched only on the session's strand.
-  std::shared_ptr<const Scene> scene_;  // as loaded; the camera and lights below override it
+  std::shared_ptr<const Scene> scene_;  // as loaded, shared; the camera and lights below override it
+  double scene_load_ms_ = 0;            // reported with the first frame after a hello that loaded it
   Camera camera_;
   std::vector<Light> lights_;
   std::string pipeline_ = "surface", terms_, format_ = "jpg";
   Settings settings_;
   long long camera_revision_ = 0, light_revision_ = 0;
-  bool dirty_ = false, in_flight_ = false, closed_ = false;
+  bool dirty_ = false, closed_ = false;
+  // The frame in flight: queued, rendering, or sent and not yet acked (0: none).
+  long long in_flight_ = 0;
+  long long frame_camera_revision_ = 0, frame_light_revision_ = 0;  // the state it renders
+  bool awaiting_ack_ = false;
+  std::shared_ptr<CancelToken> cancel_;  // the frame in flight's
   // While the user moves the camera or lights, frames render at half size; once the view has
   // been still for idle_refine_ms, one full-size frame follows.
   bool interactive_ = false, last_frame_reduced_ = false;
-  std::chrono::steady_clock::time_point last_change_;
-  boost::asio::steady_timer refine_timer_;
+  std::chrono::steady_clock::time_point last_change_, last_message_;
+  boost::asio::steady_timer refine_timer_, idle_timer_;
   long long next_frame_ = 1;
+  bool hello_pending_ = false;
+  std::deque<std::string> backlog_;
   std::deque<std::pair<std::shared_ptr<const std::string>, bool>> writes_;
 };
 

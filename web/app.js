@@ -110,7 +110,7 @@ function connect() {
     if (typeof event.data === 'string') {
       const msg = JSON.parse(event.data);
       if (msg.type === 'error') $('status').textContent = 'error: ' + msg.error;
-      else state.header = msg;
+      else if (msg.type === 'frame') state.header = msg;
       return;
     }
     const header = state.header;
@@ -130,6 +130,9 @@ function connect() {
     send({ type: 'ack', frame: header ? header.frame : 0 }, false);
   };
 }
+
+// A still view sends nothing; the server closes sessions silent for --session-idle-s.
+setInterval(() => send({ type: 'ping' }, false), 20000);
 
 setInterval(() => {
   const now = performance.now();

@@ -1,0 +1,25 @@
+// Api::check_cost: a request's estimated cost against --max-request-mb and --max-render-s.
+#include "pipelines/cost.hpp"
+#include "server/api.hpp"
+
+namespace scatter::server {
+
+void Api::check_cost(const ApiOptions& options, const std::string& pipeline, const Scene& scene,
+                     const std::string& terms, const Settings& settings, bool bake) {
+  RenderRequest request;
+  request.settings = settings;
+  if (!terms.empty()) request.terms = parse_terms(terms);
+  CostEstimate c = estimate_cost(pipeline, scene, request, bake);
+  const double mb = c.bytes() / double(1 << 20);
+  if (options.max_request_mb > 0 && mb > options.max_request_mb)
+    throw RequestTooCostly(c.memory_field, "would need about " + short_number(mb) + " MB (" + c.summary +
+                                               "), over this server's limit of " + short_number(options.max_request_mb) +
+                                               " MB per request (--max-request-mb)");
+  // A bake reports progress and can be cancelled; its time is not limited.
+  if (!bake && options.max_render_s > 0 && c.seconds > options.max_render_s)
+    throw RequestTooCostly(c.time_field, "would take about " + short_number(c.seconds) +
+                                             " s, over this server's limit of " + short_number(options.max_render_s) +
+                                             " s per render (--max-render-s)");
+}
+
+}  // namespace scatter::server
