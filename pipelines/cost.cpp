@@ -11,10 +11,12 @@
 
 namespace scatter {
 
-CostEstimate estimate_cost(const std::string& pipeline, const Scene& scene, const RenderRequest& request, bool bake) {
+CostEstimate estimate_cost(const std::string& pipeline, const Scene& scene,
+                           const RenderRequest& request, bool bake) {
   if (pipeline == "auto") {
     // AutoPipeline::render delegates to its choice with the same request; it bakes nothing.
-    CostEstimate e = estimate_cost(AutoPipeline::choose(scene, request.terms).first, scene, request, bake);
+    CostEstimate e =
+        estimate_cost(AutoPipeline::choose(scene, request.terms).first, scene, request, bake);
     e.summary = "auto -> " + e.summary;
     return e;
   }

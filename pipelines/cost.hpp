@@ -33,7 +33,7 @@ struct CostEstimate {
 // pipeline AutoPipeline::choose() picks. A render of a pipeline that bakes (single) includes the
 // bake, since a render on a cache miss bakes first. Throws ValidationError for an unknown
 // pipeline or a setting the pipeline rejects (the same message render() would give).
-CostEstimate estimate_cost(const std::string& pipeline, const Scene& scene, const RenderRequest& request,
-                           bool bake = false);
+CostEstimate estimate_cost(const std::string& pipeline, const Scene& scene,
+                           const RenderRequest& request, bool bake = false);
 
 }  // namespace scatter

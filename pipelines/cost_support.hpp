@@ -16,8 +16,8 @@ class Ledger;
 // (scene/voxelizer.cpp: ceil(side / voxel) + 2 margin per axis), padded to whole `block`s.
 struct GridShape {
   int nx = 0, ny = 0, nz = 0;
-  double voxel = 0;   // scene units
-  double longest = 0; // the solid's longest side, scene units
+  double voxel = 0;    // scene units
+  double longest = 0;  // the solid's longest side, scene units
   double count() const { return double(nx) * ny * nz; }
   std::string text() const;  // "66x66x66"
 };
@@ -38,13 +38,15 @@ double upload_seconds(double voxels);
 // brick_majorants' (gpu/grid_ops.cpp) transient copies of sigma_s and sigma_a; and its time.
 void add_medium_upload(Ledger& l, const Scene& scene, const GridShape& g);
 
-// Share of the image the object's bounding sphere covers (at least 1 %), from the camera.
+// Share of the image the object covers at most (at least 1 %): a sphere shape's disc, else its
+// bounding box's circumscribed sphere's disc or the box's projected hull, whichever is smaller.
 double coverage(const Scene& scene);
 
-// The largest extinction (per scene unit) and single-scattering albedo in the medium, from the
+// The largest extinction and scattering coefficient (per scene unit, strongest channel), the
+// mean extinction and the largest single-scattering albedo in the medium, from the
 // coefficients and the density sampled on a 5^3 lattice over the bounds (blockers excluded).
 struct MediumBounds {
-  double sigma_t = 0, sigma_s = 0, albedo = 0;
+  double sigma_t = 0, sigma_s = 0, mean_sigma_t = 0, albedo = 0;
 };
 MediumBounds medium_bounds(const Scene& scene);
 

@@ -29,40 +29,48 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
   //   floats, iface_ (blocked) 2 x 72 / block B; deposit 12 B and (g != 0) source 12 B.
   // Measured RSS: 72^3 346 MB, 104^3 628 MB (estimates 370, 671 with ~220 MB of contexts).
   double host = kGridBytes + 44 + 72;
-  double device = 40 + 36 * (d == 18 ? 2 : 1) + 24 + 2 * 12 * d + (s.blocked ? 144.0 / s.block : 0) + 12 +
-                  (scene.medium.g != 0 ? 12 : 0);
-  l.host("scene.voxels", n * host, grid + " x " + short_number(host) + " B (grid, volume, coefficients)");
-  l.device("scene.voxels", n * device, grid + " x " + short_number(device) + " B (volume, lattice, deposit)");
-  // Light rays (light_rays.cpp): side^2 per light, kRayFloats floats each, on the host and the device.
-  const double radius = 0.5 * std::sqrt(double(g.nx) * g.nx + double(g.ny) * g.ny + double(g.nz) * g.nz);
+  double device = 40 + 36 * (d == 18 ? 2 : 1) + 24 + 2 * 12 * d +
+                  (s.blocked ? 144.0 / s.block : 0) + 12 + (scene.medium.g != 0 ? 12 : 0);
+  l.host("scene.voxels", n * host,
+         grid + " x " + short_number(host) + " B (grid, volume, coefficients)");
+  l.device("scene.voxels", n * device,
+           grid + " x " + short_number(device) + " B (volume, lattice, deposit)");
+  // Light rays (light_rays.cpp): side^2 per light, kRayFloats floats each, on the host and the
+  // device.
+  const double radius =
+      0.5 * std::sqrt(double(g.nx) * g.nx + double(g.ny) * g.ny + double(g.nz) * g.nz);
   const double side = std::clamp(std::ceil(s.rays * 2 * radius), 2.0, 4096.0);
   const double rays = double(scene.lights.size()) * side * side;
-  const std::string ray_text = std::to_string(scene.lights.size()) + " lights x " + std::to_string(int(side)) + "^2 rays";
+  const std::string ray_text =
+      std::to_string(scene.lights.size()) + " lights x " + std::to_string(int(side)) + "^2 rays";
   l.host("scene.lights", rays * lbl::kRayFloats * 4, ray_text + " x 48 B");
   l.device("scene.lights", rays * lbl::kRayFloats * 4, ray_text + " x 48 B (buffer)");
   l.device("scene.image.width", px * 12, "the image's buffer");
   l.host("scene.image.width", px * 12, "the image");
 
   // Volume: measured 72^3 0.37-0.55 s, 104^3 1.75 s (~1.5 us a node with the voxelizer).
-  l.time("scene.voxels", voxelize_seconds(scene, n) + n * 1.5e-6, grid + " volume and lattice built");
+  l.time("scene.voxels", voxelize_seconds(scene, n) + n * 1.5e-6,
+         grid + " volume and lattice built");
   // March: ~2 radius / step steps a ray. Measured 62,500 rays x 250 steps 1.4 s (89 ns); x 4
   // lights 2.4 s. Taken at 120 ns.
   const double ray_steps = 2 * radius / s.step;
-  l.time("settings.rays", rays * ray_steps * 120e-9, ray_text + " x " + std::to_string(int(ray_steps)) + " steps");
+  l.time("settings.rays", rays * ray_steps * 120e-9,
+         ray_text + " x " + std::to_string(int(ray_steps)) + " steps");
   // Diffuse: ~30 ns a node a step (docs/BENCHMARKS.md: 11 ms a step at 72^3, 75 ms at 136^3);
   // convergence took 290-550 steps on the sphere (64-96 voxels); taken as 600 + 60 x the optical
-  // diameter, at most max_steps; 18 directions move 3x the state.
+  // diameter, at most max_steps. 18 directions: measured 55 s against 5.4 s at 72^3 (10x).
   const MediumBounds m = medium_bounds(scene);
   const double tau = m.sigma_t * g.longest;
-  const bool multiple = request.terms != Terms::Single && -std::expm1(-m.sigma_s * g.longest) >= s.skip_multiple;
+  const bool multiple =
+      request.terms != Terms::Single && -std::expm1(-m.sigma_s * g.longest) >= s.skip_multiple;
   if (multiple) {
     const double steps = std::min<double>(s.max_steps, 600 + 60 * tau);
-    l.time("settings.max_steps", steps * n * 30e-9 * (d == 18 ? 3 : 1),
+    l.time("settings.max_steps", steps * n * 30e-9 * (d == 18 ? 10 : 1),
            std::to_string(int(steps)) + " lattice steps x " + grid);
   }
   // View: a ray a pixel through the grid; measured 4096 px x 250 steps 66 ms (65 ns a step).
-  l.time("scene.image.width", px * ray_steps * 100e-9, std::to_string(scene.width) + "x" +
-                                                            std::to_string(scene.height) + " px viewed");
+  l.time("scene.image.width", px * ray_steps * 100e-9,
+         std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px viewed");
   return l.finish("lbl");
 }
 

@@ -7,7 +7,8 @@
 
 namespace scatter {
 
-CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest& request, bool bake) {
+CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest& request,
+                                         bool bake) {
   using namespace cost;
   ReferenceSettings s = ReferenceSettings::read(request.settings);
   Ledger upload, frame;
@@ -23,9 +24,9 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
   const bool march = request.terms == Terms::Single && !s.mc;
   frame.host("scene.voxels", n * kGridBytes, grid + " x 29 B (grid)");
   frame.device("scene.voxels", n * 24, grid + " x 24 B (sigma_s, sigma_t)");
-  frame.host("scene.image.width", px * (march ? 12 : 72), std::to_string(scene.width) + "x" +
-                                                              std::to_string(scene.height) + " px x " +
-                                                              (march ? "12" : "72") + " B");
+  frame.host("scene.image.width", px * (march ? 12 : 72),
+             std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px x " +
+                 (march ? "12" : "72") + " B");
   frame.device("scene.image.width", px * (march ? 12 : 24), "the image's device buffers");
   if (scene.medium.ior != 1.0) {
     // FlatBvh (scene/bvh.hpp) on the host and its three buffers: ~2 nodes and 9 floats a triangle.
@@ -41,28 +42,36 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
     // 1 light, step 0.25: 12.7 s = 7.4 ns a unit; taken as 15 ns.
     double per_side = scene.voxels / s.step;
     frame.time("settings.step", covered * lights * per_side * per_side * 15e-9,
-               "march " + std::to_string(int(covered)) + " covered px x " + std::to_string(int(lights)) +
-                   " lights x (voxels/step)^2");
+               "march " + std::to_string(int(covered)) + " covered px x " +
+                   std::to_string(int(lights)) + " lights x (voxels/step)^2");
   } else {
     // kernels/reference/path.cl: per path (1 + scattering events) vertices, each a free flight
     // and a shadow ray per light, crossing bricks of 8 voxels (more per unit length at finer
     // grids). Events: a/(1 - a) absorption-limited, tau + tau^2/2 escape-limited (tau: the
-    // optical radius), max_depth at most; 1 for the single term.
+    // mean optical radius), max_depth at most; 1 for the single term.
     MediumBounds m = medium_bounds(scene);
-    double tau = m.sigma_t * g.longest / 2;
-    double events = request.terms == Terms::Single
-                        ? 1.0
-                        : std::min({double(s.max_depth), m.albedo < 1 ? m.albedo / (1 - m.albedo) : 1e9, tau + tau * tau / 2});
-    double bricks = 1 + scene.voxels / 64.0;
-    // Opaque blockers give their bricks a huge majorant: null collisions (cube-torus: ~5x per
-    // path against the sphere, 2.5 s at 128^2 px, spp 12, 2 lights).
-    double blocker = scene.medium.density && scene.medium.density->blocker_sigma_a() > 0 ? 3 : 1;
-    // Measured: sphere 64^3, 256^2 px, spp 12: 1 light 1.36 s (181 ns a unit), 16 lights 7.9 s
-    // (157 ns). Taken as 250 ns, and 0.2 us a path that misses.
+    double tau = m.mean_sigma_t * g.longest / 2;
+    double events =
+        request.terms == Terms::Single
+            ? 1.0
+            : std::min({double(s.max_depth), m.albedo < 1 ? m.albedo / (1 - m.albedo) : 1e9,
+                        tau + tau * tau / 2});
+    // Measured: sphere 258^3 6.7 us a path against 1.73 at 66^3 (3.9x).
+    double bricks = 1 + scene.voxels / 32.0;
+    // Opaque blockers give their bricks a huge majorant: null collisions.
+    double blocker = scene.medium.density && scene.medium.density->blocker_sigma_a() > 0 ? 2.5 : 1;
+    // Calibrated on docs/BENCHMARKS.md's 96^2 px x 256 spp frames (an idle machine): sphere
+    // 1.61 s (71 ns a unit with bricks 1 + voxels / 64), layers 1.98 s (49 ns), bunny 1.01 s
+    // (37 ns), cube-torus 12.5 s (~90 ns with the blocker's 2.5); taken as 70 ns with bricks
+    // 1 + voxels / 32, and 0.2 us a path that misses. Here, with four engineers' builds sharing
+    // the 2 cores, sphere 256^2 px spp 12 took 1.36 s (1 light, 181 ns a unit at 1 + voxels /
+    // 64) and 7.9 s (16 lights, 157 ns): up to 2x the estimate; --max-render-s cancels what
+    // runs over.
     double units = covered * s.spp * (1 + events) * (1 + 0.6 * lights) * bricks * blocker;
-    frame.time("settings.spp", units * 250e-9 + (px - covered) * s.spp * 0.2e-6,
+    frame.time("settings.spp", units * 70e-9 + (px - covered) * s.spp * 0.2e-6,
                std::to_string(int(covered)) + " covered px x " + std::to_string(s.spp) + " spp x " +
-                   short_number(1 + events) + " vertices x " + std::to_string(int(lights)) + " lights");
+                   short_number(1 + events) + " vertices x " + std::to_string(int(lights)) +
+                   " lights");
   }
   upload.peak_of(frame);
   return upload.finish("reference");

@@ -13,23 +13,28 @@ namespace scatter {
 namespace {
 
 // Peak of the bake: voxel-sized arrays alive in make_gaussians (its accumulators are per thread).
-void bake_memory(cost::Ledger& l, const cost::GridShape& g, const SingleBakeParams& p, size_t threads) {
+void bake_memory(cost::Ledger& l, const cost::GridShape& g, const SingleBakeParams& p,
+                 size_t threads) {
   const double n = g.count(), samples = p.samples, nc = sh_count(p.sh_bands);
   const std::string grid = g.text() + " voxels";
   // VoxelGrid 29 B; bake_single's moment 12, rho 4, q 4, layer 1, anchor 8, cdf 8 (doubles);
   // make_gaussians: sum + partial (a double per voxel per thread), field + fpart (3 doubles per
   // voxel per thread), CGLS r and q (2 doubles).
   const double per_voxel = cost::kGridBytes + 37 + 8.0 * threads + 24.0 * threads + 16;
-  l.host("scene.voxels", n * per_voxel, grid + " x " + short_number(per_voxel) + " B (grid and bake arrays, " +
-                                            std::to_string(threads) + " threads)");
+  l.host("scene.voxels", n * per_voxel,
+         grid + " x " + short_number(per_voxel) + " B (grid and bake arrays, " +
+             std::to_string(threads) + " threads)");
   // Candidates (samples x candidates): position, q, voxel (36 B) and the elimination's
   // neighbour lists (~25 (index, distance) pairs, the hash grid): ~400 B each (its comment: ~1 GB
   // at the 2.5M bound).
   l.host("settings.samples", samples * p.candidates * 400,
-         std::to_string(p.samples) + " samples x " + std::to_string(p.candidates) + " candidates x 400 B");
+         std::to_string(p.samples) + " samples x " + std::to_string(p.candidates) +
+             " candidates x 400 B");
   // The product: up to 2 pieces a sample (split), 15 floats + 3 x sh_order^2 each; serialised
   // once into the cache (a second copy).
-  l.host("settings.sh_order", 2 * 2 * samples * (15 + 3 * nc) * 4, "the product and its serialised copy");
+  l.host("settings.samples", 2 * 2 * samples * (15 + 3 * nc) * 4,
+         std::to_string(p.samples) +
+             " samples x (15 + 3 x sh_order^2) floats x 2 pieces x 2 copies (product, serialised)");
 }
 
 }  // namespace
@@ -46,19 +51,26 @@ CostEstimate SinglePipeline::estimate(const Scene& scene, const RenderRequest& r
 
   Ledger baking;
   bake_memory(baking, g, p, threads);
-  // Times measured on the bunny (docs/BENCHMARKS.md, today's defaults: 64^3 9.3 s, 128^3 48 s):
-  // ddod ~40 ns a voxel-direction, sampling ~26 us a candidate, gaussians ~200 ns a voxel a pass
-  // (4 + 2 x weight_fit + sigma_fit passes), sh ~8-27 ns a sample-direction-voxel step. Taken
-  // at 60 ns, 30 us, 300 ns and 40 ns.
+  // Times measured on the bunny on an idle machine (docs/BENCHMARKS.md, today's defaults: 64^3
+  // 9.3 s, 128^3 48 s): ddod ~40 ns a voxel-direction, sampling ~26 us a candidate, gaussians
+  // ~200 ns a voxel a pass (4 + 2 x weight_fit + sigma_fit passes), sh ~8-27 ns a
+  // sample-direction-voxel step. Taken at 80 ns, 25 us x sqrt(candidates / 25000) (sphere 56^3
+  // here: 25k candidates 0.95 s, 100k 9.8 s), 400 ns and 40 ns. With four builds sharing the two
+  // cores the same bakes ran 3-6x longer (sphere 56^3, 5000 samples: ddod 4.4 s, gaussians 8.3 s).
   baking.time("scene.voxels", voxelize_seconds(scene, n), grid + " voxelized");
-  baking.time("settings.directions", n * p.directions * 60e-9, grid + " x " + std::to_string(p.directions) + " directions (ddod)");
-  baking.time("settings.samples", samples * p.candidates * 30e-6 + n * 1e-6,
-              std::to_string(p.samples) + " x " + std::to_string(p.candidates) + " candidates eliminated");
+  baking.time("settings.directions", n * p.directions * 80e-9,
+              grid + " x " + std::to_string(p.directions) + " directions (ddod)");
+  const double candidates = samples * p.candidates;
+  baking.time(
+      "settings.samples",
+      candidates * 25e-6 * std::sqrt(std::max(1.0, candidates / 25000)) + n * 1e-6,
+      std::to_string(p.samples) + " x " + std::to_string(p.candidates) + " candidates eliminated");
   const double passes = 4 + 2.0 * p.weight_fit + p.sigma_fit;
-  baking.time("scene.voxels", n * passes * 300e-9, grid + " x " + short_number(passes) + " Gaussian passes");
+  baking.time("scene.voxels", n * passes * 400e-9,
+              grid + " x " + short_number(passes) + " Gaussian passes");
   baking.time("settings.directions", samples * p.directions * side * 40e-9,
-              std::to_string(p.samples) + " samples x " + std::to_string(p.directions) + " directions x " +
-                  std::to_string(int(side)) + " steps (sh)");
+              std::to_string(p.samples) + " samples x " + std::to_string(p.directions) +
+                  " directions x " + std::to_string(int(side)) + " steps (sh)");
   if (bake) return baking.finish("single");
 
   Ledger frame;
@@ -68,23 +80,26 @@ CostEstimate SinglePipeline::estimate(const Scene& scene, const RenderRequest& r
   // targets (front, back, third, fourth, out: 20 B a pixel each) with the read-back.
   const double pieces = 2 * samples, lights = std::max<size_t>(scene.lights.size(), 1);
   frame.host("scene.voxels", n * kGridBytes, grid + " x 29 B (the grid kept for exact_tr)");
-  frame.host("settings.sh_order", 2 * samples * (15 + 3 * nc) * 4, "the product");
+  frame.host("settings.samples", 2 * samples * (15 + 3 * nc) * 4, "the product");
   frame.device("scene.voxels", s.exact_tr ? n * 12 : 0, grid + " x 12 B (sigma_t)");
-  frame.device("settings.samples", pieces * (108 + 12 * nc + (s.exact_tr ? 108 + 2 * 36 * lights : 0)),
+  frame.device("settings.samples",
+               pieces * (108 + 12 * nc + (s.exact_tr ? 108 + 2 * 36 * lights : 0)),
                std::to_string(p.samples) + " samples' buffers");
-  frame.device("scene.image.width", px * 5 * 20, std::to_string(scene.width) + "x" + std::to_string(scene.height) +
-                                                     " px x 5 targets x 20 B");
+  frame.device(
+      "scene.image.width", px * 5 * 20,
+      std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px x 5 targets x 20 B");
   frame.host("scene.image.width", px * 28, "the read-back");
   // Shade (exact_tr): each sample marches ~side voxels to the eye and to each light. Splat:
   // per covered pixel ~9 x (side / spacing) overlapping Gaussians (3-sigma quads, spacing ~
   // longest / cbrt(samples)).
   if (s.exact_tr)
-    frame.time("settings.samples", pieces * (1 + lights) * side * 20e-9,
-               std::to_string(p.samples) + " samples x " + std::to_string(int(lights + 1)) + " rays");
+    frame.time(
+        "settings.samples", pieces * (1 + lights) * side * 20e-9,
+        std::to_string(p.samples) + " samples x " + std::to_string(int(lights + 1)) + " rays");
   const double overlap = 9 * std::cbrt(samples);
   frame.time("scene.image.width", px * coverage(scene) * overlap * 60e-9 + px * 4 * 200e-9,
-             std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px x " + std::to_string(int(overlap)) +
-                 " Gaussians splatted");
+             std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px x " +
+                 std::to_string(int(overlap)) + " Gaussians splatted");
   baking.peak_of(frame);
   return baking.finish("single");
 }

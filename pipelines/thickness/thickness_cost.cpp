@@ -27,14 +27,16 @@ void add_mesh(cost::Ledger& l, const Scene& scene) {
 // One distance map per light, all alive until the frame ends (the `shadows` / `maps` vectors).
 void add_shadow_maps(cost::Ledger& l, const Scene& scene, int size, double ns_per_texel) {
   const double lights = double(scene.lights.size()), texels = double(size) * size;
-  const std::string what = std::to_string(scene.lights.size()) + " lights x " + std::to_string(size) + "^2 texels";
+  const std::string what =
+      std::to_string(scene.lights.size()) + " lights x " + std::to_string(size) + "^2 texels";
   l.device("settings.shadow_size", lights * texels * kTargetBytes, what + " x 20 B");
   l.time("settings.shadow_size", lights * texels * ns_per_texel * 1e-9, what + " drawn");
 }
 
 }  // namespace
 
-CostEstimate ThicknessPipeline::estimate(const Scene& scene, const RenderRequest& request, bool bake) {
+CostEstimate ThicknessPipeline::estimate(const Scene& scene, const RenderRequest& request,
+                                         bool bake) {
   using namespace cost;
   ThicknessSettings s = ThicknessSettings::read(request.settings);
   Ledger l;
@@ -51,12 +53,14 @@ CostEstimate ThicknessPipeline::estimate(const Scene& scene, const RenderRequest
   // (16 ns a unit); depth peel and read-back 1024^2: 0.16 s (150 ns a pixel).
   const double lights = std::max<size_t>(scene.lights.size(), 1);
   l.time("settings.steps", px * s.steps * lights * 30e-9,
-         pixels_text(scene) + " x " + std::to_string(s.steps) + " steps x " + std::to_string(int(lights)) + " lights");
+         pixels_text(scene) + " x " + std::to_string(s.steps) + " steps x " +
+             std::to_string(int(lights)) + " lights");
   l.time("scene.image.width", px * 300e-9, pixels_text(scene) + " peeled and read back");
   return l.finish("thickness");
 }
 
-CostEstimate SurfacePipeline::estimate(const Scene& scene, const RenderRequest& request, bool bake) {
+CostEstimate SurfacePipeline::estimate(const Scene& scene, const RenderRequest& request,
+                                       bool bake) {
   using namespace cost;
   SurfaceSettings s = SurfaceSettings::read(request.settings);
   Ledger l;
@@ -69,7 +73,8 @@ CostEstimate SurfacePipeline::estimate(const Scene& scene, const RenderRequest& 
   l.host("scene.image.width", px * 28, pixels_text(scene) + " x 28 B (read-back)");
   // Raster: the triangles, and the pixels shaded by every light.
   const double lights = std::max<size_t>(scene.lights.size(), 1);
-  l.time("scene.image.width", px * (300e-9 + lights * 20e-9) + double(scene.mesh->triangle_count()) * 1e-6,
+  l.time("scene.image.width",
+         px * (300e-9 + lights * 20e-9) + double(scene.mesh->triangle_count()) * 1e-6,
          pixels_text(scene) + " rasterised");
   return l.finish("surface");
 }
