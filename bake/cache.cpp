@@ -19,10 +19,12 @@ namespace fs = std::filesystem;
 using Digest = std::array<unsigned char, 32>;
 
 // File layout, all integers little-endian:
-//   magic "SCATBAKE" (8) | format version u32 | payload size u64 | SHA-256 of payload (32) |
-//   payload
+//   magic "SCATBAKE" (8) | format version u32 | payload size u64 | key (32, the hex decoded) |
+//   SHA-256 of payload (32) | payload
+// The key names whose product this is, so that a whole, valid file under another key's name (a
+// copy, a rename, a sync tool's mix-up) is not served as this key's product.
 constexpr std::string_view kMagic = "SCATBAKE";
-constexpr size_t kHeaderSize = 8 + 4 + 8 + 32;
+constexpr size_t kKeyAt = 8 + 4 + 8, kChecksumAt = kKeyAt + 32, kHeaderSize = kChecksumAt + 32;
 
 Digest sha256(std::string_view bytes) {
   Digest d;
@@ -44,6 +46,12 @@ std::string to_hex(const Digest& d) {
   return hex;
 }
 
+Digest to_digest(std::string_view bytes) {
+  Digest d{};
+  std::copy_n(bytes.begin(), std::min(bytes.size(), d.size()), d.begin());
+  return d;
+}
+
 void put_le(std::string& out, uint64_t v, int bytes) {
   for (int i = 0; i < bytes; ++i) out += static_cast<char>((v >> (8 * i)) & 0xff);
 }
@@ -54,10 +62,20 @@ uint64_t get_le(const char* in, int bytes) {
   return v;
 }
 
-std::string make_header(std::string_view payload) {
+// The 32 bytes a 64-character key spells (the caller has checked is_bake_key).
+std::string key_bytes(const std::string& key_hex) {
+  auto nibble = [](char c) { return c <= '9' ? c - '0' : c - 'a' + 10; };
+  std::string bytes(key_hex.size() / 2, '\0');
+  for (size_t i = 0; i < bytes.size(); ++i)
+    bytes[i] = static_cast<char>(nibble(key_hex[2 * i]) << 4 | nibble(key_hex[2 * i + 1]));
+  return bytes;
+}
+
+std::string make_header(const std::string& key_hex, std::string_view payload) {
   std::string h(kMagic);
   put_le(h, kBakeFormatVersion, 4);
   put_le(h, payload.size(), 8);
+  h += key_bytes(key_hex);
   const Digest d = sha256(payload);
   h.append(reinterpret_cast<const char*>(d.data()), d.size());
   return h;
@@ -68,9 +86,9 @@ struct FileRead {
   std::string payload_or_problem;
 };
 
-// Reads and verifies one .bake file. The length is taken from the open stream, so a file renamed
-// over this one meanwhile does not mix with it.
-FileRead read_bake_file(const fs::path& path) {
+// Reads and verifies one .bake file, which must hold key_hex's product. The length is taken from
+// the open stream, so a file renamed over this one meanwhile does not mix with it.
+FileRead read_bake_file(const fs::path& path, const std::string& key_hex) {
   std::error_code ec;
   if (!fs::exists(path, ec)) return {ec ? FileRead::kUnreadable : FileRead::kAbsent, ec.message()};
   std::ifstream in(path, std::ios::binary | std::ios::ate);
@@ -91,10 +109,12 @@ FileRead read_bake_file(const fs::path& path) {
     return {FileRead::kCorrupt, "header says " + std::to_string(size) +
                                     " payload bytes, file has " +
                                     std::to_string(length - kHeaderSize)};
+  if (const std::string_view key(header + kKeyAt, 32); key != key_bytes(key_hex))
+    return {FileRead::kCorrupt, "holds the product of key " + to_hex(to_digest(key)) + ", not of this one"};
   std::string payload(size, '\0');
   if (!in.read(payload.data(), static_cast<std::streamsize>(size)))
     return {FileRead::kUnreadable, "cannot read the payload"};
-  if (!std::equal(header + 20, header + kHeaderSize, sha256(payload).begin(),
+  if (!std::equal(header + kChecksumAt, header + kHeaderSize, sha256(payload).begin(),
                   [](char a, unsigned char b) { return static_cast<unsigned char>(a) == b; }))
     return {FileRead::kCorrupt, "payload checksum mismatch"};
   return {FileRead::kOk, std::move(payload)};
@@ -182,7 +202,7 @@ std::optional<std::shared_ptr<const std::string>> BakeCache::get(const std::stri
 
   // Disk I/O without the lock; other keys stay served from memory meanwhile.
   const fs::path path = file_path(key_hex);
-  FileRead read = read_bake_file(path);
+  FileRead read = read_bake_file(path, key_hex);
   if (read.outcome == FileRead::kOk) {
     std::error_code touch;
     fs::last_write_time(path, fs::file_time_type::clock::now(), touch);  // recently used
@@ -293,7 +313,7 @@ void BakeCache::write_file(const std::string& key_hex, const std::string& bytes)
   std::error_code ec;
   {
     std::ofstream out(temp_path, std::ios::binary | std::ios::trunc);
-    out << make_header(bytes);
+    out << make_header(key_hex, bytes);
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     out.close();
     if (!out) ec = std::make_error_code(std::errc::io_error);

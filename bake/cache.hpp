@@ -16,9 +16,9 @@
 
 namespace scatter {
 
-// Part of every key and of every file header: bump it when a product's layout changes, and old
-// keys (and files) stop matching.
-inline constexpr uint32_t kBakeFormatVersion = 1;
+// Part of every key and of every file header: bump it when a product's or the file's layout
+// changes, and old keys (and files) stop matching. 2: the header names the file's key.
+inline constexpr uint32_t kBakeFormatVersion = 2;
 
 // SHA-256 of bytes, lowercase hex (64 chars). Uses OpenSSL EVP.
 std::string sha256_hex(std::string_view bytes);
@@ -55,7 +55,7 @@ class BakeCache {
   explicit BakeCache(std::filesystem::path dir = {}, size_t memory_budget_bytes = 512u << 20);
 
   // Returns the product's bytes, or nullopt. Looks in memory, then on disk; a disk file whose
-  // header or checksum does not verify is counted in stats().corrupt, renamed aside to
+  // header (magic, version, size, this key) or checksum does not verify is counted in stats().corrupt, renamed aside to
   // <key>.corrupt, logged, and reported as a miss so that the caller re-bakes and put()s.
   // Throws std::invalid_argument unless is_bake_key(key_hex).
   std::optional<std::shared_ptr<const std::string>> get(const std::string& key_hex);

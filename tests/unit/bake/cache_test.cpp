@@ -23,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr size_t kHeaderSize = 52;  // magic 8 + version 4 + size 8 + SHA-256 32
+constexpr size_t kHeaderSize = 84;  // magic 8 + version 4 + size 8 + key 32 + SHA-256 32
 
 std::string read_all(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -207,6 +207,7 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         Damage{"FlippedPayloadByte", [](std::string& s) { s[kHeaderSize + 1234] ^= 0x01; }},
         Damage{"FlippedChecksumByte", [](std::string& s) { s[kHeaderSize - 1] ^= 0x80; }},
+        Damage{"FlippedKeyByte", [](std::string& s) { s[20] ^= 0x01; }},
         Damage{"TruncatedPayload", [](std::string& s) { s.resize(s.size() - 1); }},
         Damage{"TruncatedHeader", [](std::string& s) { s.resize(kHeaderSize / 2); }},
         Damage{"EmptyFile", [](std::string& s) { s.clear(); }},
@@ -218,6 +219,18 @@ INSTANTIATE_TEST_SUITE_P(
                [](std::string& s) { s[8] = static_cast<char>(kBakeFormatVersion + 1); }},
         Damage{"HugeSize", [](std::string& s) { s.replace(12, 8, std::string(8, '\xff')); }}),
     [](const ::testing::TestParamInfo<Damage>& p) { return std::string(p.param.name); });
+
+// A whole, valid file under another key's name (copied, renamed) is not that key's product.
+TEST_F(BakeCacheTest, AnotherKeysFileIsCorrupt) {
+  const std::string a = key_of("a"), b = key_of("b");
+  BakeCache(dir_).put(a, binary_payload(2000, 4));
+  fs::copy_file(dir_ / (a + ".bake"), dir_ / (b + ".bake"));
+  BakeCache cache(dir_);
+  EXPECT_FALSE(cache.get(b).has_value());
+  EXPECT_EQ(cache.stats().corrupt, 1u);
+  EXPECT_TRUE(fs::exists(dir_ / (b + ".corrupt")));
+  EXPECT_EQ(**cache.get(a), binary_payload(2000, 4));  // its own key still reads it
+}
 
 TEST_F(BakeCacheTest, InvalidKeysAreRejectedBeforeTouchingDisk) {
   BakeCache cache(dir_);
@@ -349,7 +362,7 @@ TEST(BakeCacheDefaultDir, FollowsXdgThenHome) {
 // The disk budget: after a put the least recently used files go until the directory fits; a disk
 // hit counts as a use; the file just written stays; stale temporary files are swept.
 TEST_F(BakeCacheTest, DiskBudgetEvictsLeastRecentlyUsedFiles) {
-  const std::string payload(1000, 'x');  // 1052 bytes on disk with the header
+  const std::string payload(1000, 'x');  // 1084 bytes on disk with the header
   {
     BakeCache writer(dir_);
     for (int i = 0; i < 4; ++i) writer.put(key_of(std::to_string(i)), payload);
@@ -362,7 +375,7 @@ TEST_F(BakeCacheTest, DiskBudgetEvictsLeastRecentlyUsedFiles) {
   fs::last_write_time(dir_ / (key_of("tmp") + ".bake.tmp-1-1"), now - std::chrono::hours(2));
   BakeCache cache(dir_, 0);  // nothing in memory: every get reads the disk
   ASSERT_TRUE(cache.get(key_of("0")));  // a use: 0 is now the newest
-  cache.set_disk_budget(3 * 1052);
+  cache.set_disk_budget(3 * 1084);
   cache.put(key_of("4"), payload);  // five files, room for three
   EXPECT_EQ(cache.stats().disk_evictions, 2u);
   EXPECT_FALSE(fs::exists(cache.file_path(key_of("1"))));
