@@ -24,7 +24,7 @@ scene='{"mesh": {"shape": "sphere", "radius": 1},
   "camera": {"position": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_deg": 40},
   "image": {"width": 48, "height": 48}, "voxels": 32}'
 fast='{"samples": 2000, "directions": 16, "sh_order": 3}'
-slow='{"samples": 24000, "directions": 96, "sh_order": 4}'
+slow='{"samples": 8000, "directions": 48, "sh_order": 3}'
 bake_body() { echo "{\"scene\": $scene, \"pipeline\": \"single\", \"settings\": $1}"; }
 render_body() { echo "{\"scene\": $scene, \"pipeline\": \"single\", \"terms\": \"single\", \"settings\": ${1%\}}, \"exact_tr\": 0}}"; }
 
