@@ -110,7 +110,7 @@ requests_on() { metric "${daemon_port[$1]}" "scatter_http_requests_total{route=\
 
 # ---- (a) keys spread, and stick -------------------------------------------------------------
 keys=(sphere bunny layers cube-torus)
-for i in $(seq 1 12); do keys+=("$(printf '%064x' "$((i * 7919))")"); done  # like asset ids
+for i in $(seq 1 28); do keys+=("$(printf '%064x' "$((i * 7919))")"); done  # like asset ids
 declare -A home=()
 count_a=0 count_b=0
 for key in "${keys[@]}"; do
@@ -136,7 +136,8 @@ for key in "${keys[@]:0:6}"; do
 done
 echo "ok: ${#keys[@]} keys: $count_a requests on a, $count_b on b; each key on one daemon"
 
-# Live sessions: WebSocket upgrades through nginx, held open, one per key.
+# Live sessions: WebSocket upgrades through nginx, held open, one per key: 8 keys of each daemon
+# (within the daemons' 16 sessions).
 ws_open() {  # ws_open KEY: opens fd ws_fd[KEY], checks the 101
   local fd line
   exec {fd}<>"/dev/tcp/127.0.0.1/$proxy"
@@ -155,25 +156,32 @@ ws_send() {  # ws_send KEY TEXT: one masked text frame (a zero mask: the bytes g
   fi
 }
 declare -A ws_fd=()
-for key in "${keys[@]}"; do ws_open "$key"; done
+session_keys=()
+for d in a b; do
+  n=0
+  for key in "${keys[@]}"; do
+    [ "${home[$key]}" = "$d" ] && [ $n -lt 8 ] && session_keys+=("$key") && n=$((n + 1))
+  done
+done
+for key in "${session_keys[@]}"; do ws_open "$key"; done
 sessions_a=$(metric "${daemon_port[a]}" scatter_sessions) sessions_b=$(metric "${daemon_port[b]}" scatter_sessions)
 expect_a=0
-for key in "${keys[@]}"; do [ "${home[$key]}" != a ] || expect_a=$((expect_a + 1)); done
-expect_b=$((${#keys[@]} - expect_a))
+for key in "${session_keys[@]}"; do [ "${home[$key]}" != a ] || expect_a=$((expect_a + 1)); done
+expect_b=$((${#session_keys[@]} - expect_a))
 [ "$sessions_a" = "$expect_a" ] && [ "$sessions_b" = "$expect_b" ] ||
-  fail "${#keys[@]} sessions: a holds $sessions_a and b $sessions_b, their keys say $expect_a and $expect_b"
+  fail "${#session_keys[@]} sessions: a holds $sessions_a and b $sessions_b, their keys say $expect_a and $expect_b"
 [ "$sessions_a" -gt 0 ] && [ "$sessions_b" -gt 0 ] || fail "the sessions are all on one daemon ($sessions_a, $sessions_b)"
 # A frame comes back through the proxy.
 small='{"mesh": {"shape": "sphere", "radius": 1}, "medium": {"sigma_s": [2, 2, 2], "sigma_a": [0.05, 0.05, 0.05],
   "density": {"type": "constant"}}, "lights": [{"type": "point", "position": [3, 3, 3], "color": [1, 1, 1], "intensity": 20}],
   "camera": {"position": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_deg": 40},
   "image": {"width": 32, "height": 32}, "voxels": 16}'
-ws_send "${keys[0]}" "{\"type\": \"hello\", \"scene\": $small, \"pipeline\": \"surface\", \"format\": \"png\"}"
+ws_send "${session_keys[0]}" "{\"type\": \"hello\", \"scene\": $small, \"pipeline\": \"surface\", \"format\": \"png\"}"
 frame=""
-IFS= read -r -t 30 -d '}' frame <&"${ws_fd[${keys[0]}]}" || true
+IFS= read -r -t 30 -d '}' frame <&"${ws_fd[${session_keys[0]}]}" || true
 grep -qE '"frame":[0-9]+' <<<"$frame" || fail "no frame through nginx within 30 s: ${frame:0:300}"
-for key in "${!ws_fd[@]}"; do exec {ws_fd[$key]}>&-; done
-echo "ok: ${#keys[@]} sessions: $sessions_a on a, $sessions_b on b; a frame came back through nginx"
+for fd in "${ws_fd[@]}"; do exec {fd}>&-; done
+echo "ok: ${#session_keys[@]} sessions: $sessions_a on a, $sessions_b on b; a frame came back through nginx"
 
 # ---- (b) a bake through one daemon is a cache hit through the other ------------------------
 for key in "${keys[@]}"; do [ "${home[$key]}" = a ] && key_a=$key; [ "${home[$key]}" = b ] && key_b=$key; done
@@ -232,9 +240,9 @@ for key in "${keys[@]}"; do
 done
 after_b=$(requests_on b /api/health 200)
 [ $((after_b - before_b)) -ge ${#keys[@]} ] || fail "b counted $((after_b - before_b)) of ${#keys[@]} requests"
-unset 'ws_fd[@]'
-declare -A ws_fd=()
+ws_fd=()
 ws_open "$key_a"
 [ "$(metric "${daemon_port[b]}" scatter_sessions)" -ge 1 ] || fail "a session of a's key did not open on b"
-exec {ws_fd[$key_a]}>&-
+fd=${ws_fd[$key_a]}
+exec {fd}>&-
 echo "ok: a killed: all ${#keys[@]} keys ($moved of them a's) and a new session served by b"
