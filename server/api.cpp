@@ -238,6 +238,9 @@ HttpResponse Api::health() {
                         {"version", "0.1.0"},
                         {"uptime_s", uptime},
                         {"queue_depth", queue_.depth()},
+                        {"render_busy", queue_.busy()},
+                        {"bake_queue_depth", bake_queue_.depth()},
+                        {"bake_busy", bake_queue_.busy()},
                         {"sessions", sessions_.load()}});
 }
 

@@ -19,7 +19,8 @@ Server::Server(ServerOptions options)
         a.max_message_bytes = options_.max_upload_mb << 20;
         return a;
       }(), queue_, metrics_, &bake_queue_, [this](std::function<void()> f) { boost::asio::post(workers_, std::move(f)); }),
-      acceptor_(io_) {
+      acceptor_(io_),
+      stop_timer_(io_) {
   boost::system::error_code ec;
   auto address = boost::asio::ip::make_address(options_.bind, ec);
   if (ec) throw std::runtime_error("--bind: \"" + options_.bind + "\" is not an IP address");
@@ -88,7 +89,10 @@ void Server::stop() {
   boost::asio::post(io_, [this] {
     boost::system::error_code ec;
     acceptor_.close(ec);
-    io_.stop();
+    // A moment for the answers to what was dropped or cancelled ("503: the server is stopping")
+    // to reach their clients, then the I/O ends.
+    stop_timer_.expires_after(kStopLinger);
+    stop_timer_.async_wait([this](boost::system::error_code) { io_.stop(); });
   });
 }
 

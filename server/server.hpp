@@ -52,6 +52,8 @@ class Server {
   // their slots back to the Api). ~Server has stopped every thread that posts here by then.
   boost::asio::io_context io_;
   boost::asio::ip::tcp::acceptor acceptor_;
+  boost::asio::steady_timer stop_timer_;
+  static constexpr std::chrono::milliseconds kStopLinger{250};
   unsigned short port_ = 0;
 };
 

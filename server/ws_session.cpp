@@ -21,7 +21,11 @@ WsSession::WsSession(boost::asio::ip::tcp::socket&& socket, Api& api, boost::asi
 
 WsSession::~WsSession() {
   if (cancel_) cancel_->cancel("the client left");
-  api_.release_session();
+  release_slot();
+}
+
+void WsSession::release_slot() {
+  if (std::exchange(holds_slot_, false)) api_.release_session();
 }
 
 void WsSession::run(beast::http::request<beast::http::string_body> upgrade) {
@@ -42,6 +46,7 @@ void WsSession::end(const std::string& why) {
   refine_timer_.cancel();
   idle_timer_.cancel();
   spdlog::info("event=session_end reason=\"{}\"", why);
+  release_slot();  // at once: a client that does not answer the close must not keep it
   if (!writes_.empty()) {  // a write is pending, and a close is a write too: drop the connection
     beast::error_code ec;
     beast::get_lowest_layer(ws_).socket().close(ec);
@@ -49,6 +54,13 @@ void WsSession::end(const std::string& why) {
   }
   ws_.async_close(websocket::close_reason(websocket::close_code::policy_error, why),
                   [self = shared_from_this()](beast::error_code) {});
+  // A peer that never completes the close handshake loses the connection soon after.
+  idle_timer_.expires_after(std::chrono::seconds(2));
+  idle_timer_.async_wait([self = shared_from_this()](boost::system::error_code ec) {
+    if (ec) return;
+    beast::error_code ignored;
+    beast::get_lowest_layer(self->ws_).socket().close(ignored);
+  });
 }
 
 // A session that says nothing for --session-idle-s (no pose, ack or ping) gives its slot back.

@@ -59,6 +59,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void schedule_refine();
   void watch_idle();
   void end(const std::string& why);
+  void release_slot();
 
   boost::beast::websocket::stream<boost::beast::tcp_stream> ws_;
   boost::beast::flat_buffer buffer_;
@@ -89,6 +90,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   boost::asio::steady_timer refine_timer_, idle_timer_;
   long long next_frame_ = 1;
   bool hello_pending_ = false;
+  bool holds_slot_ = true;  // the Api's session slot, given back once (at end() or destruction)
   std::deque<std::string> backlog_;
   std::deque<std::pair<std::shared_ptr<const std::string>, bool>> writes_;
 };

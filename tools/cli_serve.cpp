@@ -31,7 +31,7 @@ bool is_loopback(const std::string& bind) {
 }
 
 // How long SIGTERM waits for the render and bake threads to stop their cancelled jobs.
-constexpr auto kStopGrace = std::chrono::milliseconds(1500);
+constexpr auto kStopGrace = std::chrono::milliseconds(1000);
 
 int run_serve(ServeOptions o) {
   if (o.token_given && o.server.api.token.empty())

@@ -51,5 +51,18 @@ TEST(JsonReader, MalformedTextReportsPosition) {
   EXPECT_NE(e.find("line 1"), std::string::npos) << e;
 }
 
+TEST(JsonReader, NestingIsBoundedBeforeAnythingRecurses) {
+  auto nested = [](int levels) { return std::string(levels, '[') + std::string(levels, ']'); };
+  EXPECT_NO_THROW(parse_json(nested(kMaxJsonDepth), "body"));
+  EXPECT_THROW(parse_json(nested(kMaxJsonDepth + 1), "body"), ValidationError);
+  try {
+    parse_json("{\"a\": " + nested(100000) + "}", "body");  // would exhaust a recursive walker's stack
+    FAIL() << "accepted 100000 levels";
+  } catch (const ValidationError& e) {
+    EXPECT_EQ(e.field(), "body");
+    EXPECT_NE(std::string(e.what()).find("deeper than 64 levels"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace scatter
