@@ -1,8 +1,11 @@
 // Latency from a camera pose sent to its frame received, minus the server's render time (the
 // server overhead: queueing, encoding, transport), over a WebSocket session.
-// Usage: node --experimental-websocket bench/ws-latency.mjs URL [POSES] [SCENE] [PIPELINE]   e.g. ws://127.0.0.1:8080/api/ws
+// Usage: node --experimental-websocket bench/ws-latency.mjs URL [POSES] [SCENE] [PIPELINE] [SIZE]   e.g. ws://127.0.0.1:8080/api/ws
+// SIZE: frames of SIZE x SIZE while the camera moves (the scene file, sent inline at twice that:
+// moving frames are half size); without it, the shipped scene by name.
 // Needs a global WebSocket: Node 22+, or Node 20 with --experimental-websocket.
-const [url, posesArg = '60', scene = 'bunny', pipeline = 'surface'] = process.argv.slice(2);
+import { readFileSync } from 'node:fs';
+const [url, posesArg = '60', scene = 'bunny', pipeline = 'surface', size] = process.argv.slice(2);
 const poses = Number(posesArg);
 if (typeof WebSocket === 'undefined') {
   console.error('this script needs a global WebSocket: Node 22+, or node --experimental-websocket');
@@ -14,7 +17,13 @@ let header = null, revision = 0, sentAt = 0;
 const latency = [], overhead = [], render = [];
 const pose = (r) => ({ type: 'camera', position: [3.6 * Math.sin(r * 0.05), 0.2, 3.6 * Math.cos(r * 0.05)],
                        target: [0, 0, 0], revision: r });
-ws.onopen = () => ws.send(JSON.stringify({ type: 'hello', scene_name: scene, pipeline, format: 'jpg' }));
+function hello() {
+  if (!size) return { type: 'hello', scene_name: scene, pipeline, format: 'jpg' };
+  const inline = JSON.parse(readFileSync(new URL(`../scenes/${scene}.json`, import.meta.url), 'utf8'));
+  inline.image = { width: 2 * Number(size), height: 2 * Number(size) };
+  return { type: 'hello', scene: inline, pipeline, format: 'jpg' };
+}
+ws.onopen = () => ws.send(JSON.stringify(hello()));
 ws.onmessage = (e) => {
   if (typeof e.data === 'string') { header = JSON.parse(e.data); return; }
   const now = performance.now();

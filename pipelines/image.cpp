@@ -1,5 +1,7 @@
 #include "pipelines/image.hpp"
 
+#include <array>
+
 #include <png.h>
 
 #include <OpenImageIO/filesystem.h>
@@ -17,6 +19,38 @@ unsigned char encode_srgb(double v) {
   v = std::clamp(v, 0.0, 1.0);
   double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
   return static_cast<unsigned char>(std::lround(s * 255));
+}
+
+// The linear value at which encode_srgb() steps from k to k + 1, for k = 0..254 (and a 256th
+// step above 1 that is never reached).
+const std::array<double, 256>& srgb_steps() {
+  static const std::array<double, 256> steps = [] {
+    std::array<double, 256> t{};
+    t[255] = 2.0;
+    for (int k = 0; k < 255; ++k) {
+      double s = (k + 0.5) / 255;  // the sRGB value that rounds up to k + 1
+      double v = s <= 12.92 * 0.0031308 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
+      // Nudge onto the exact step of encode_srgb (the formula's inverse is off by an ulp or so).
+      while (encode_srgb(v) > k) v = std::nextafter(v, 0.0);
+      while (encode_srgb(v) <= k) v = std::nextafter(v, 2.0);
+      t[k] = v;
+    }
+    return t;
+  }();
+  return steps;
+}
+
+// to_srgb8 without pow(): the byte at the start of each of kBuckets equal slices of [0, 1], then
+// one comparison with the next step (the curve rises less than one level per slice: its steepest
+// slope, 12.92 x 255 near black, is 0.8 levels a slice). Gives exactly encode_srgb's bytes.
+constexpr int kBuckets = 4096;
+const std::array<unsigned char, kBuckets + 1>& srgb_buckets() {
+  static const std::array<unsigned char, kBuckets + 1> b = [] {
+    std::array<unsigned char, kBuckets + 1> t{};
+    for (int i = 0; i <= kBuckets; ++i) t[i] = encode_srgb(double(i) / kBuckets);
+    return t;
+  }();
+  return b;
 }
 
 void append_bytes(png_structp png, png_bytep data, png_size_t n) {
@@ -74,8 +108,16 @@ std::string encode_oiio(const Image& image, const std::string& format, const Ton
 }  // namespace
 
 std::vector<unsigned char> to_srgb8(const Image& image, const ToneMap& tone) {
+  const auto& steps = srgb_steps();
+  const auto& buckets = srgb_buckets();
   std::vector<unsigned char> bytes(image.rgb.size());
-  for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = encode_srgb(image.rgb[i] * tone.exposure);
+  for (size_t i = 0; i < bytes.size(); ++i) {
+    double v = double(image.rgb[i]) * tone.exposure;
+    if (!(v > 0)) v = 0;  // NaN too
+    if (v >= 1) v = 1;
+    unsigned k = buckets[static_cast<int>(v * kBuckets)];
+    bytes[i] = static_cast<unsigned char>(k + (v >= steps[k]));
+  }
   return bytes;
 }
 

@@ -344,16 +344,17 @@ void Api::render(const HttpRequest& http, const Respond& respond) {
       RenderResult& result = *o.result;
       nlohmann::json timings = nlohmann::json::object();
       for (const auto& t : result.timings) timings[t.stage] = t.ms;
-      timings["queue_wait"] = o.wait_ms;
       nlohmann::json plan = result.plan;
       if (format == "json")
         return respond(json_response({{"pipeline", result.plan.pipeline}, {"plan", plan}, {"timings_ms", timings},
-                                      {"width", result.image.width}, {"height", result.image.height}}));
+                                      {"queue_wait_ms", o.wait_ms}, {"width", result.image.width},
+                                      {"height", result.image.height}}));
       HttpResponse response{200, format == "exr" ? "image/x-exr" : (format == "png" ? "image/png" : "image/jpeg"),
                             encode_image(result.image, format, ToneMap{exposure}), {}};
       response.headers = {{"X-Scatter-Pipeline", result.plan.pipeline},
                           {"X-Scatter-Plan", plan.dump()},
-                          {"X-Scatter-Timings", timings.dump()}};
+                          {"X-Scatter-Timings", timings.dump()},
+                          {"X-Scatter-Queue-Wait-Ms", short_number(o.wait_ms)}};
       respond(std::move(response));
     });
   });

@@ -59,6 +59,9 @@ void Server::do_accept() {
       if (ec != boost::asio::error::operation_aborted) spdlog::warn("event=accept_error error=\"{}\"", ec.message());
       if (!acceptor_.is_open()) return;
     } else {
+      // A frame is a header then an image: without this, Nagle's algorithm holds the image
+      // until the client acknowledges the header (its delayed ack: ~40 ms a frame).
+      socket.set_option(tcp::no_delay(true), ec);
       std::make_shared<HttpSession>(std::move(socket), api_, workers_, options_.max_upload_mb << 20)->run();
     }
     do_accept();

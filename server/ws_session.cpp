@@ -291,13 +291,12 @@ void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
     RenderResult& r = *o.result;
     nlohmann::json timings = nlohmann::json::object();
     for (const auto& t : r.timings) timings[t.stage] = t.ms;
-    timings["queue_wait"] = o.wait_ms;
     nlohmann::json header;
     std::string bytes;
     try {
       header = {{"type", "frame"}, {"frame", frame}, {"camera_revision", cam_rev}, {"light_revision", light_rev},
                 {"pipeline", r.plan.pipeline}, {"plan", r.plan},
-                {"timings_ms", timings}, {"width", r.image.width}, {"height", r.image.height},
+                {"timings_ms", timings}, {"queue_wait_ms", o.wait_ms}, {"width", r.image.width}, {"height", r.image.height},
                 {"format", format}, {"reduced", reduced}};
       bytes = encode_image(r.image, format);
     } catch (const std::exception& e) {

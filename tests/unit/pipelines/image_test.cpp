@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include <OpenImageIO/imageio.h>
 
 #include "../test_util.hpp"
@@ -40,6 +43,27 @@ TEST(ImageIo, PngHoldsToneMappedSrgb) {
   write_image(a, dir / "b.png", ToneMap{0.5});
   EXPECT_EQ(to_srgb8(a, ToneMap{0.5})[3], 255);  // 2.0 * 0.5 = 1
   EXPECT_EQ(to_srgb8(a, ToneMap{0.5})[0], 137);  // 0.25
+}
+
+TEST(ImageIo, SrgbBytesAreTheFormulaRounded) {
+  // Every step of the 8-bit curve, and values on both sides of each, against the sRGB formula.
+  Image image(1, 1);
+  image.rgb.clear();
+  for (int i = 0; i <= 200000; ++i) image.rgb.push_back(float(i) / 160000);  // 0 .. 1.25
+  image.rgb.insert(image.rgb.end(), {-1.f, std::nanf(""), 1e30f});
+  image.width = 1;
+  image.height = int(image.rgb.size());  // rgb is 3 floats a pixel: pad to a whole pixel count
+  while (image.rgb.size() % 3) image.rgb.push_back(0.5f);
+  image.height = int(image.rgb.size() / 3);
+  std::vector<unsigned char> bytes = to_srgb8(image, ToneMap{1.0});
+  for (size_t i = 0; i < 200001; ++i) {
+    double v = std::clamp(double(image.rgb[i]), 0.0, 1.0);
+    double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+    ASSERT_EQ(int(bytes[i]), int(std::lround(s * 255))) << "linear " << image.rgb[i];
+  }
+  EXPECT_EQ(bytes[200001], 0);    // negative
+  EXPECT_EQ(bytes[200002], 0);    // NaN: black, not white
+  EXPECT_EQ(bytes[200003], 255);  // huge
 }
 
 TEST(ImageIo, UnknownExtensionAndUnwritablePathsAreErrors) {
