@@ -1,8 +1,41 @@
 #include "server/metrics.hpp"
 
+#include <unistd.h>
+
+#include <fstream>
 #include <sstream>
 
 namespace scatter::server {
+namespace {
+
+// Resident set size from /proc/self/statm (its second field, in pages); 0 where there is none.
+double resident_bytes() {
+  std::ifstream statm("/proc/self/statm");
+  long long size = 0, resident = 0;
+  if (!(statm >> size >> resident)) return 0;
+  return double(resident) * double(sysconf(_SC_PAGESIZE));
+}
+
+// Seconds since the epoch at which this process started: the boot time (btime in /proc/stat)
+// plus the process's start in clock ticks after boot (field 22 of /proc/self/stat); 0 if unknown.
+double start_time_seconds() {
+  std::ifstream stat_file("/proc/stat");
+  std::string key;
+  double btime = 0;
+  while (stat_file >> key)
+    if (key == "btime" && (stat_file >> btime)) break;
+  std::ifstream self("/proc/self/stat");
+  std::string line;
+  if (btime <= 0 || !std::getline(self, line)) return 0;
+  // The command name (field 2) may hold spaces: count fields after its closing parenthesis.
+  std::istringstream rest(line.substr(line.rfind(')') + 1));
+  std::string field;
+  for (int i = 3; i <= 22 && rest >> field; ++i)
+    if (i == 22) return btime + std::stod(field) / double(sysconf(_SC_CLK_TCK));
+  return 0;
+}
+
+}  // namespace
 
 const std::vector<double>& Metrics::buckets() {
   static const std::vector<double> b = {0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30};
@@ -72,7 +105,15 @@ std::string Metrics::text(size_t queue_depth) const {
   out += "# HELP scatter_render_queue_depth Jobs waiting for the render thread.\n";
   out += "# TYPE scatter_render_queue_depth gauge\n";
   out += "scatter_render_queue_depth " + std::to_string(queue_depth) + "\n";
-  return out;
+  std::ostringstream process;
+  process.precision(15);
+  process << "# HELP process_resident_memory_bytes Resident memory size in bytes.\n"
+          << "# TYPE process_resident_memory_bytes gauge\n"
+          << "process_resident_memory_bytes " << resident_bytes() << "\n"
+          << "# HELP process_start_time_seconds Start time of the process since unix epoch in seconds.\n"
+          << "# TYPE process_start_time_seconds gauge\n"
+          << "process_start_time_seconds " << start_time_seconds() << "\n";
+  return out + process.str();
 }
 
 }  // namespace scatter::server

@@ -16,7 +16,8 @@ class Metrics {
                       const std::vector<std::pair<std::string, double>>& stages);
   // A render dropped before it ran or stopped while running (client gone, shutdown, time limit).
   void count_cancelled();
-  // Prometheus text exposition; `queue_depth` is sampled by the caller.
+  // Prometheus text exposition; `queue_depth` is sampled by the caller. Ends with the standard
+  // process metrics process_resident_memory_bytes and process_start_time_seconds (from /proc).
   std::string text(size_t queue_depth) const;
 
  private:
