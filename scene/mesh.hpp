@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "scene/vec.hpp"
@@ -43,11 +44,20 @@ WatertightReport check_watertight(const Mesh& mesh);
 
 struct MeshLimits {
   size_t max_triangles = 5'000'000;
+  size_t max_bytes = size_t(1) << 30;  // of the file itself
 };
 
-// Imports OBJ, PLY, STL, glTF and the other formats assimp reads; all meshes in the file are
-// merged into one. Throws std::runtime_error naming the file and the problem: the importer's
-// message, no triangles, too many, or a coordinate that is not finite or beyond 1e6.
+// Imports OBJ, PLY, STL, OFF, glTF (self-contained: .glb or data URIs) and the other formats
+// assimp reads, chosen by the file's extension; all meshes in the file are merged into one. The
+// importer sees the file's bytes only: references to other files (an OBJ's mtllib, a glTF's
+// external buffers) are not followed. Throws std::runtime_error naming the file and the problem:
+// the importer's message, a malformed OFF file, a face naming a vertex that does not exist, no
+// triangles, too many, or a coordinate that is not finite or beyond 1e6.
 Mesh load_mesh(const std::filesystem::path& path, const MeshLimits& limits = {});
+
+// The same for a file's bytes held in memory; `format` is its extension ("obj", "off", ...) and
+// `name` is what messages call it.
+Mesh load_mesh_bytes(std::string_view bytes, std::string_view format, const std::string& name,
+                     const MeshLimits& limits = {});
 
 }  // namespace scatter

@@ -1,0 +1,26 @@
+// Checks of mesh files before assimp reads them, for the formats whose assimp readers trust what
+// a file says about itself.
+//
+// OFF (Object File Format: "OFF", counts, vertex lines, face lines). Assimp's OFF reader trusts the header: counts larger than the data leave faces with no
+// indices (an assertion inside assimp then aborts the process), an index past the vertices is
+// clamped to the last one, a face of more than 9 vertices is dropped, and a line of 4096 characters
+// or more overflows its line buffer. This check reads the file the way that reader does and
+// rejects each of those.
+#pragma once
+
+#include <string_view>
+
+namespace scatter {
+
+// Throws std::runtime_error saying what is wrong and on which line.
+void check_off_text(std::string_view text);
+
+// PLY: the header ("ply", "format", "element NAME COUNT", "property TYPE NAME",
+// "property list TYPE TYPE NAME", "comment", "obj_info", "end_header"). Assimp's PLY reader loops
+// without end on some malformed headers and allocates what the counts say before it reads the data.
+// This checks the header's grammar and that the data holds what the header counts: in ascii, one
+// line per row with a number per property (a length, then that many, per list); in binary, every
+// row, its lists' lengths read as the file's byte order says, inside the data.
+void check_ply(std::string_view bytes);
+
+}  // namespace scatter
