@@ -106,6 +106,14 @@ class BlockerDensity : public DensityField {
 std::shared_ptr<const DensityField> load_grid(JsonObject& obj, const std::filesystem::path& base_dir,
                                               const GridLimits& limits) {
   std::filesystem::path header_path = base_dir / obj.string("file", std::nullopt);
+  // A regular file of bounded size: a FIFO or a device named here would block or never end.
+  constexpr uintmax_t kMaxHeaderBytes = 1 << 20;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(header_path, ec))
+    throw ValidationError(obj.path("file"), "cannot open " + header_path.string() + ": not a regular file");
+  if (std::filesystem::file_size(header_path, ec) > kMaxHeaderBytes || ec)
+    throw ValidationError(obj.path("file"), "grid header " + header_path.string() + " is larger than " +
+                                                std::to_string(kMaxHeaderBytes) + " bytes");
   std::ifstream in(header_path);
   if (!in) throw ValidationError(obj.path("file"), "cannot open " + header_path.string());
   std::string text((std::istreambuf_iterator<char>(in)), {});
@@ -131,15 +139,15 @@ std::shared_ptr<const DensityField> load_grid(JsonObject& obj, const std::filesy
   std::filesystem::path data_path = header_path.parent_path() / h.string("data", std::nullopt);
   h.finish();
   size_t count = size_t(n[0]) * n[1] * n[2];
-  std::error_code ec;
-  auto bytes = std::filesystem::file_size(data_path, ec);
+  auto bytes = std::filesystem::is_regular_file(data_path, ec) ? std::filesystem::file_size(data_path, ec) : 0;
   if (ec || bytes != count * sizeof(float))
     throw ValidationError(header_path.string(), "data file " + data_path.string() + " must hold " +
                                                     std::to_string(count * sizeof(float)) +
                                                     " bytes (float32, x fastest)");
   std::vector<float> data(count);
   std::ifstream raw(data_path, std::ios::binary);
-  raw.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(bytes));
+  if (!raw.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(bytes)))
+    throw ValidationError(header_path.string(), "cannot read data file " + data_path.string());
   for (size_t i = 0; i < count; ++i)
     if (!std::isfinite(data[i]) || data[i] < 0)
       throw ValidationError(data_path.string(), "value " + std::to_string(i) +

@@ -207,8 +207,11 @@ void check_imported(const aiScene& scene, const std::string& name) {
 
 Mesh load_mesh(const std::filesystem::path& path, const MeshLimits& limits) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
+  if (!std::filesystem::exists(path, ec))
     throw std::runtime_error("mesh file " + path.string() + " does not exist");
+  // Not a FIFO or a device: reading one could block or never end.
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw std::runtime_error("mesh file " + path.string() + " is not a regular file");
   auto size = std::filesystem::file_size(path, ec);
   if (ec) throw std::runtime_error("cannot read mesh file " + path.string() + ": " + ec.message());
   if (size > limits.max_bytes)
