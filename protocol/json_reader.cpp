@@ -149,8 +149,9 @@ nlohmann::json parse_json(std::string_view text, const std::string& what, int ma
   };
   try {
     return nlohmann::json::parse(text, bounded);
-  } catch (const nlohmann::json::parse_error& e) {
-    // e.what() carries the byte offset; strip the library's "[json.exception...]" prefix.
+  } catch (const nlohmann::json::exception& e) {
+    // Malformed text (parse_error, with the byte offset) and numbers past a double's range
+    // (out_of_range, "1e999"); strip the library's "[json.exception...]" prefix.
     std::string msg = e.what();
     auto pos = msg.find("] ");
     throw ValidationError(what, "is not valid JSON: " +

@@ -217,19 +217,27 @@ bool Api::acquire_session() {
 
 void Api::release_session() { --sessions_; }
 
-bool Api::authorized(const HttpRequest& request) const {
-  if (options_.token.empty() || same_secret(request.authorization, "Bearer " + options_.token)) return true;
-  auto q = request.target.find('?');
-  if (q == std::string::npos) return false;
-  std::string_view query = std::string_view(request.target).substr(q + 1);
+std::map<std::string, std::string> parse_query(std::string_view target) {
+  std::map<std::string, std::string> q;
+  auto at = target.find('?');
+  if (at == std::string_view::npos) return q;
+  std::string_view query = target.substr(at + 1);
   while (!query.empty()) {
     std::string_view item = query.substr(0, query.find('&'));
     query.remove_prefix(std::min(query.size(), item.size() + 1));
-    if (item.rfind("token=", 0) != 0) continue;
-    auto value = percent_decode(item.substr(6));
-    if (value && same_secret(*value, options_.token)) return true;
+    auto eq = item.find('=');
+    if (eq == std::string_view::npos) continue;
+    auto key = percent_decode(item.substr(0, eq)), value = percent_decode(item.substr(eq + 1));
+    if (key && value) q.emplace(*key, *value);
   }
-  return false;
+  return q;
+}
+
+bool Api::authorized(const HttpRequest& request) const {
+  if (options_.token.empty() || same_secret(request.authorization, "Bearer " + options_.token)) return true;
+  auto q = parse_query(request.target);
+  auto token = q.find("token");
+  return token != q.end() && same_secret(token->second, options_.token);
 }
 
 HttpResponse Api::health() {

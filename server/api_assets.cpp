@@ -20,24 +20,6 @@ namespace {
 
 bool is_asset_id(const std::string& s) { return is_bake_key(s); }
 
-// Query parameters of a target ("/a?x=1&y=2").
-std::map<std::string, std::string> query_of(const std::string& target) {
-  std::map<std::string, std::string> q;
-  auto at = target.find('?');
-  if (at == std::string::npos) return q;
-  std::string rest = target.substr(at + 1);
-  size_t start = 0;
-  while (start <= rest.size()) {
-    size_t end = rest.find('&', start);
-    if (end == std::string::npos) end = rest.size();
-    std::string kv = rest.substr(start, end - start);
-    auto eq = kv.find('=');
-    if (eq != std::string::npos) q[kv.substr(0, eq)] = kv.substr(eq + 1);
-    start = end + 1;
-  }
-  return q;
-}
-
 std::vector<double> numbers(const std::string& text, size_t count, const std::string& field) {
   std::vector<double> v;
   std::stringstream in(text);
@@ -105,7 +87,7 @@ HttpResponse Api::assets(const HttpRequest& request) {
   }
   if (request.method != "POST") return error(405, request.method + " is not allowed on /api/assets: use POST or GET");
   if (dir.empty()) return error(503, "this server keeps no assets (start it with a --cache-dir)");
-  auto q = query_of(request.target);
+  auto q = parse_query(request.target);
   std::string kind = q.count("kind") ? q["kind"] : "mesh";
   if (kind != "mesh" && kind != "grid") throw ValidationError("kind", "must be mesh or grid");
   if (request.body.empty()) throw ValidationError("body", "is empty: send the file's bytes");

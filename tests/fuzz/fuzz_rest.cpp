@@ -1,13 +1,15 @@
 // REST bodies (POST /api/render, POST /api/bakes, the WebSocket "hello"): the body parsed as the
 // server parses it (parse_json, depth-bounded), then Api::read_render_spec with the server's own
 // options (scenes folder, assets folder) and a scene library, finish() (unknown fields), and the
-// request's cost estimate (Api::check_cost), all of which need no GPU.
+// request's cost estimate (Api::check_cost), all of which need no GPU; and the bytes as a query
+// string (parse_query, percent-decoding).
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 
 #include "fuzz_util.hpp"
 #include "server/api.hpp"
+#include "server/api_util.hpp"
 #include "server/scene_library.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -19,6 +21,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return o;
   }();
   static scatter::server::SceneLibrary library(64 << 20);
+  // The same bytes as a request target's query string (crashes and sanitizer reports are the finding).
+  (void)scatter::server::parse_query("/api/assets?" + std::string(body));
   nlohmann::json request;
   if (!scatter::fuzz::parse(body, request)) return 0;
   try {

@@ -51,6 +51,16 @@ TEST(JsonReader, MalformedTextReportsPosition) {
   EXPECT_NE(e.find("line 1"), std::string::npos) << e;
 }
 
+TEST(JsonReader, NumbersPastADoublesRangeAreValidationErrors) {
+  try {
+    parse_json(R"({"exposure": 1e999})", "body");
+    FAIL() << "accepted 1e999";
+  } catch (const ValidationError& e) {
+    EXPECT_EQ(e.field(), "body");
+    EXPECT_NE(std::string(e.what()).find("is not valid JSON"), std::string::npos) << e.what();
+  }
+}
+
 TEST(JsonReader, NestingIsBoundedBeforeAnythingRecurses) {
   auto nested = [](int levels) { return std::string(levels, '[') + std::string(levels, ']'); };
   EXPECT_NO_THROW(parse_json(nested(kMaxJsonDepth), "body"));
