@@ -68,8 +68,7 @@ HttpResponse Api::create_bake(const std::string& body) {
                    s.value("cache_hit", false), s.value("seconds", 0.0));
     };
     work.dropped = [j](const std::string& why) {
-      j->cancel();
-      j->run([](const BakeProgress&) -> BakeResult { throw BakeCancelled(); });  // records it as cancelled
+      j->cancel();  // a queued job is recorded as cancelled at once
       spdlog::info("event=bake_dropped id={} reason=\"{}\"", j->id(), why);
     };
     if (!bake_queue_.post(std::move(work))) {
