@@ -1,6 +1,10 @@
 #include "pipelines/auto_pipeline.hpp"
 
+#include "pipelines/registry.hpp"
+
 namespace scatter {
+
+const PipelineInfo& auto_info();
 
 std::pair<std::string, std::string> AutoPipeline::choose(const Scene& scene, Terms terms) {
   if (!scene.medium.density->homogeneous())
@@ -26,10 +30,27 @@ Pipeline& AutoPipeline::delegate(const std::string& name) {
   return *p;
 }
 
+namespace {
+
+// The request as the chosen pipeline gets it: its own settings only.
+RenderRequest delegated(const RenderRequest& request, const std::string& chosen) {
+  RenderRequest r = request;
+  r.settings = AutoPipeline::settings_for(chosen, request.settings);
+  return r;
+}
+
+}  // namespace
+
 Plan AutoPipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
+  info().validate(request.settings);
   auto [chosen, why] = choose(scene, request.terms);
-  Plan inner = delegate(chosen).plan(scene, request);
+  RenderRequest inner_request = delegated(request, chosen);
+  Plan inner = delegate(chosen).plan(scene, inner_request);
+  std::string unused;
+  for (const auto& [key, value] : request.settings)
+    if (!inner_request.settings.count(key)) unused += (unused.empty() ? "" : ", ") + key;
+  if (!unused.empty()) why += " (settings not used by " + chosen + ": " + unused + ")";
   Plan p{name() + " -> " + chosen, request.terms, {{"choose", true, chosen + ": " + why}}};
   p.stages.insert(p.stages.end(), inner.stages.begin(), inner.stages.end());
   return p;
@@ -37,9 +58,19 @@ Plan AutoPipeline::plan(const Scene& scene, const RenderRequest& request) {
 
 RenderResult AutoPipeline::render(const Scene& scene, const RenderRequest& request) {
   Plan p = plan(scene, request);
-  RenderResult r = delegate(choose(scene, request.terms).first).render(scene, request);
+  const std::string chosen = choose(scene, request.terms).first;
+  RenderResult r = delegate(chosen).render(scene, delegated(request, chosen));
   r.plan = std::move(p);
   return r;
+}
+
+CostEstimate AutoPipeline::estimate(const Scene& scene, const RenderRequest& request, bool bake) {
+  auto_info().validate(request.settings);
+  const std::string chosen = choose(scene, request.terms).first;
+  // AutoPipeline::render delegates to its choice with its settings; auto bakes nothing itself.
+  CostEstimate e = pipeline_info(chosen).estimate(scene, delegated(request, chosen), bake);
+  e.summary = "auto -> " + e.summary;
+  return e;
 }
 
 }  // namespace scatter

@@ -3,11 +3,15 @@
 //
 //   homogeneous medium, single term  -> thickness (no optical-depth bake is needed)
 //   anything else                    -> reference
+//
+// Settings: those of thickness and reference (pipelines/auto_info.cpp), each checked by its own
+// pipeline whatever the choice; the chosen one gets its own.
 #pragma once
 
 #include <map>
 #include <memory>
 
+#include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace scatter {
@@ -15,15 +19,16 @@ namespace scatter {
 class AutoPipeline : public Pipeline {
  public:
   AutoPipeline(gpu::Gpu& gpu, BakeCache* cache) : gpu_(gpu), cache_(cache) {}
-  std::string name() const override { return "auto"; }
-  std::vector<Terms> supported_terms() const override {
-    return {Terms::Single, Terms::Multiple, Terms::All};
-  }
+  const PipelineInfo& info() const override;
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 
   // The pipeline auto would use, and why.
   static std::pair<std::string, std::string> choose(const Scene& scene, Terms terms);
+  // The part of `settings` that `delegate` declares.
+  static Settings settings_for(const std::string& delegate, const Settings& settings);
+  // The cost of the chosen pipeline's render with its settings (pipelines/cost.hpp).
+  static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
 
  private:
   Pipeline& delegate(const std::string& name);

@@ -5,14 +5,9 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 
-#include "pipelines/auto_pipeline.hpp"
-#include "pipelines/lbl/lbl_pipeline.hpp"
-#include "pipelines/psf/psf_pipeline.hpp"
-#include "pipelines/reference/reference_pipeline.hpp"
-#include "pipelines/surface/surface_pipeline.hpp"
-#include "pipelines/single/single_pipeline.hpp"
-#include "pipelines/thickness/thickness_pipeline.hpp"
+#include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
 
 namespace scatter {
@@ -66,20 +61,15 @@ void SettingsReader::finish() const {
       throw ValidationError("settings." + key, "is not a setting of pipeline " + pipeline_);
 }
 
-std::vector<std::string> pipeline_names() { return {"auto", "surface", "reference", "thickness", "single", "psf", "lbl"}; }
-
-std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu, BakeCache* cache) {
-  if (name == "auto") return std::make_unique<AutoPipeline>(gpu, cache);
-  if (name == "surface") return std::make_unique<SurfacePipeline>(gpu);
-  if (name == "reference") return std::make_unique<ReferencePipeline>(gpu);
-  if (name == "thickness") return std::make_unique<ThicknessPipeline>(gpu);
-  if (name == "single") return std::make_unique<SinglePipeline>(gpu, cache);
-  if (name == "psf") return std::make_unique<PsfPipeline>(gpu);
-  if (name == "lbl") return std::make_unique<LblPipeline>(gpu);
-  std::string list;
-  for (const auto& n : pipeline_names()) list += (list.empty() ? "" : ", ") + n;
-  throw ValidationError("pipeline", "unknown pipeline \"" + name + "\" (known: " + list + ")");
+StagePlan& plan_stage(Plan& plan, const std::string& name) {
+  for (StagePlan& s : plan.stages)
+    if (s.name == name) return s;
+  throw std::logic_error("plan " + plan.pipeline + " has no stage " + name);
 }
+
+std::string Pipeline::name() const { return info().name; }
+std::vector<Terms> Pipeline::supported_terms() const { return info().terms; }
+std::vector<std::pair<std::string, double>> Pipeline::bake_stages() const { return info().bake_stages; }
 
 std::string short_number(double v) {
   char buf[32];
@@ -93,13 +83,6 @@ std::string exact_number(double v) {
   return std::string(buf, r.ptr);
 }
 
-void require_terms(const Pipeline& pipeline, Terms terms) {
-  auto ok = pipeline.supported_terms();
-  if (std::find(ok.begin(), ok.end(), terms) != ok.end()) return;
-  std::string list;
-  for (Terms t : ok) list += (list.empty() ? "" : ", ") + to_string(t);
-  throw ValidationError("terms", "pipeline " + pipeline.name() + " cannot render the " +
-                                     to_string(terms) + " term (it renders: " + list + ")");
-}
+void require_terms(const Pipeline& pipeline, Terms terms) { require_terms(pipeline.info(), terms); }
 
 }  // namespace scatter

@@ -40,6 +40,9 @@ struct Plan {
   std::vector<StagePlan> stages;
 };
 
+// The stage called `name`; throws std::logic_error when the plan has none (a pipeline's bug).
+StagePlan& plan_stage(Plan& plan, const std::string& name);
+
 struct StageTime {
   std::string stage;
   double ms = 0;
@@ -95,21 +98,25 @@ class BakeCache;
 void to_json(nlohmann::json& j, const StagePlan& s);
 void to_json(nlohmann::json& j, const Plan& p);
 
+struct PipelineInfo;  // pipelines/registry.hpp
+
 class Pipeline {
  public:
   virtual ~Pipeline() = default;
-  virtual std::string name() const = 0;
+  // The pipeline's description in the registry: name, terms, settings, bake stages.
+  virtual const PipelineInfo& info() const = 0;
+  std::string name() const;
   // The terms this pipeline can render; render() rejects others with a ValidationError.
-  virtual std::vector<Terms> supported_terms() const = 0;
+  std::vector<Terms> supported_terms() const;
+  // The stages bake() reports progress for, each with its rough share of the whole bake.
+  std::vector<std::pair<std::string, double>> bake_stages() const;
   virtual Plan plan(const Scene& scene, const RenderRequest& request) = 0;
   // Makes (or finds in the cache) what render() will need for this scene and request's settings.
   virtual BakeResult bake(const Scene&, const RenderRequest&, const BakeProgress& = {}) { return {}; }
-  // The stages bake() reports progress for, each with its rough share of the whole bake.
-  virtual std::vector<std::pair<std::string, double>> bake_stages() const { return {}; }
   virtual RenderResult render(const Scene& scene, const RenderRequest& request) = 0;
 };
 
-// Names the factory knows, in a stable order.
+// Names the registry holds (pipelines/registry.hpp), in a stable order.
 std::vector<std::string> pipeline_names();
 // Throws ValidationError (field "pipeline") for an unknown name. Pipelines that bake keep their
 // products in `cache` (shared, content-addressed); without one they keep a private memory cache.

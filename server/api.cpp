@@ -11,12 +11,23 @@
 #include "bake/cache.hpp"
 #include "gpu/embedded_sources.hpp"
 #include "gpu/error.hpp"
+#include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
 #include "scene/scene.hpp"
 #include "server/api_util.hpp"
 
 namespace scatter::server {
 namespace {
+
+// GET /api/pipelines: every pipeline's description and settings table (pipelines/registry.hpp).
+const nlohmann::json& pipelines_json() {
+  static const nlohmann::json j = [] {
+    nlohmann::json list = nlohmann::json::array();
+    for (const PipelineInfo* p : registry()) list.push_back(*p);
+    return nlohmann::json{{"pipelines", list}};
+  }();
+  return j;
+}
 
 // Inline scenes may only name files inside the scenes folder: no absolute paths, no "..".
 void check_file_fields(const nlohmann::json& j, const std::string& path, int depth = 0) {
@@ -164,7 +175,7 @@ void Api::route(const HttpRequest& request, std::string& route_name, const Respo
     if (request.method != it->second)
       return respond(error(405, request.method + " is not allowed on " + path + ": use " + it->second));
     if (path == "/api/health") return respond(health());
-    if (path == "/api/pipelines") return respond(json_response({{"pipelines", pipeline_names()}}));
+    if (path == "/api/pipelines") return respond(json_response(pipelines_json()));
     if (path == "/api/devices") return devices(respond);
     if (path == "/api/render") return render(request, respond);
     return respond(metrics_text());
@@ -314,20 +325,14 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
       throw ValidationError("scene", without_paths(e.what(), options));
     }
   }
-  check_pipeline(spec.pipeline, spec.terms);
+  check_pipeline(spec.pipeline, spec.terms, spec.settings);
   return spec;
 }
 
-void Api::check_pipeline(const std::string& pipeline, const std::string& terms) {
-  auto names = pipeline_names();
-  if (std::find(names.begin(), names.end(), pipeline) == names.end()) {
-    gpu::Gpu unused;  // make_pipeline names the known ones in its error
-    make_pipeline(pipeline, unused);
-  }
-  if (terms.empty()) return;
-  Terms t = parse_terms(terms);
-  gpu::Gpu unused;  // contexts are made on first use; constructing a pipeline makes none
-  require_terms(*make_pipeline(pipeline, unused), t);
+void Api::check_pipeline(const std::string& pipeline, const std::string& terms, const Settings& settings) {
+  const PipelineInfo& info = pipeline_info(pipeline);  // names the known ones when unknown
+  if (!terms.empty()) require_terms(info, parse_terms(terms));
+  info.validate(settings);
 }
 
 void Api::render(const HttpRequest& http, const Respond& respond) {

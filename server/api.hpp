@@ -118,8 +118,9 @@ class Api {
   // scene's "asset" fields become the uploaded files' paths; shipped scenes come from `library`.
   static RenderSpec read_render_spec(JsonObject& r, const nlohmann::json& json, const ApiOptions& options,
                                      SceneLibrary& library);
-  // Throws ValidationError for an unknown pipeline or terms it cannot render; needs no GPU.
-  static void check_pipeline(const std::string& pipeline, const std::string& terms);
+  // Throws ValidationError for an unknown pipeline, terms it cannot render (unless `terms` is
+  // empty) or a setting it rejects, from the registry alone: no instance, no GPU.
+  static void check_pipeline(const std::string& pipeline, const std::string& terms, const Settings& settings);
   // Throws RequestTooCostly (413) when rendering (or baking) `scene` as asked is estimated past
   // --max-request-mb or --max-render-s; the message names the field and the limit.
   static void check_cost(const ApiOptions& options, const std::string& pipeline, const Scene& scene,

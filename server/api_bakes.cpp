@@ -4,6 +4,7 @@
 
 #include <fstream>
 
+#include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
 #include "server/api.hpp"
 #include "server/api_util.hpp"
@@ -40,17 +41,13 @@ HttpResponse Api::create_bake(const std::string& body) {
   std::shared_ptr<const Scene> scene = spec.scene;
   const std::string pipeline = spec.pipeline;
   const Settings settings = spec.settings;
-  // Checked here with a pipeline of its own (constructing one makes no GPU context), so that a
-  // typo is a 400 at once and a POST never waits behind a running bake. Whether it bakes at all
-  // is known before plan(), which for some pipelines voxelizes.
-  std::vector<std::pair<std::string, double>> stages;
-  {
-    gpu::Gpu unused;
-    auto p = make_pipeline(pipeline, unused);
-    stages = p->bake_stages();
-    if (stages.empty()) throw ValidationError("pipeline", "pipeline " + pipeline + " needs no bake");
-    p->plan(*scene, {p->supported_terms().front(), settings, nullptr});
-  }
+  // Checked from the registry (no instance, no GPU), so that a typo is a 400 at once and a POST
+  // never waits behind a running bake.
+  const PipelineInfo& info = pipeline_info(pipeline);
+  if (!info.bakes()) throw ValidationError("pipeline", "pipeline " + pipeline + " needs no bake");
+  info.validate(settings);
+  const std::vector<std::pair<std::string, double>> stages = info.bake_stages;
+  const Terms terms = info.default_terms;
   check_cost(options_, pipeline, *scene, "", settings, true);
   nlohmann::json identity = {{"pipeline", pipeline}, {"settings", settings}, {"scene", bake_identity(scene_json)}};
   bool created = false;
@@ -58,10 +55,9 @@ HttpResponse Api::create_bake(const std::string& body) {
     spdlog::info("event=bake_queued id={} pipeline={}", j->id(), pipeline);
     RenderQueue::Job work;
     // On the bake queue's own thread and GPU contexts: live sessions' frames do not wait for it.
-    work.run = [j, scene, pipeline, settings](RenderQueue::Context& c) {
+    work.run = [j, scene, pipeline, settings, terms](RenderQueue::Context& c) {
       j->run([&](const BakeProgress& progress) {
-        Pipeline& p = c.pipeline(pipeline);
-        return p.bake(*scene, {p.supported_terms().front(), settings, nullptr}, progress);
+        return c.pipeline(pipeline).bake(*scene, {terms, settings, nullptr}, progress);
       });
       nlohmann::json s = j->status();
       spdlog::info("event=bake_finished id={} state={} cache_hit={} seconds={}", j->id(), s["state"].get<std::string>(),

@@ -1,7 +1,7 @@
 // scatterd bake SCENE.json --pipeline single [--directions N --samples N --sh-order L] [--json]
 #include <iostream>
 
-#include "pipelines/pipeline.hpp"
+#include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
 #include "tools/cache_option.hpp"
 #include "tools/commands.hpp"
@@ -29,15 +29,23 @@ nlohmann::json timing_object(const std::vector<StageTime>& timings) {
 int run_bake(const BakeOptions& o) {
   Scene scene = load_scene(o.scene);
   RenderRequest request;
-  request.terms = Terms::Single;
   request.settings = parse_settings(o.settings);
   if (o.directions != -1) request.settings["directions"] = o.directions;
   if (o.samples != -1) request.settings["samples"] = o.samples;
   if (o.sh_order != -1) request.settings["sh_order"] = o.sh_order;
+  const PipelineInfo& info = pipeline_info(o.pipeline);
+  info.validate(request.settings);  // from the table: before any device or cache is opened
+  request.terms = info.default_terms;
+  if (!info.bakes()) {
+    if (o.json)
+      std::cout << nlohmann::json{{"pipeline", info.name}, {"needed", false}}.dump() << "\n";
+    else
+      std::cout << "pipeline " << info.name << " needs no bake\n";
+    return 0;
+  }
   auto cache = open_cache(o.cache);
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
   auto pipeline = make_pipeline(o.pipeline, gpu, cache.get());
-  pipeline->plan(scene, {pipeline->supported_terms().front(), request.settings, nullptr});  // validates
   std::string last_stage;
   BakeResult r = pipeline->bake(scene, request, [&](const std::string& stage, double f) {
     if (o.json) return;

@@ -17,5 +17,6 @@ Handler add_bench_command(CLI::App& app);
 Handler add_serve_command(CLI::App& app);
 Handler add_bake_command(CLI::App& app);
 Handler add_beam_command(CLI::App& app);
+Handler add_pipelines_command(CLI::App& app);
 
 }  // namespace scatter::tools

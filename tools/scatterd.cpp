@@ -1,4 +1,4 @@
-// scatterd: the scatter daemon and its one-shot verbs (render, bake, slab, bench, devices).
+// scatterd: the scatter daemon and its one-shot verbs (render, bake, slab, bench, devices, pipelines).
 #include <spdlog/spdlog.h>
 
 #include <iostream>
@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   add(&scatter::tools::add_serve_command);
   add(&scatter::tools::add_bake_command);
   add(&scatter::tools::add_beam_command);
+  add(&scatter::tools::add_pipelines_command);
 
   try {
     app.parse(argc, argv);

@@ -26,8 +26,7 @@ std::string material_key(const Scene& scene, const LblSettings& s) {
   k.add("density", std::to_string(reinterpret_cast<uintptr_t>(scene.medium.density.get())));
   for (int c = 0; c < 3; ++c) k.add("sigma_s", scene.medium.sigma_s[c]).add("sigma_a", scene.medium.sigma_a[c]);
   k.add("g", scene.medium.g).add("ior", scene.medium.ior).add("voxels", scene.voxels);
-  k.add("smooth", s.smooth).add("blocked", s.blocked).add("block", s.block).add("inner", s.inner);
-  k.add("directions", s.directions);
+  lbl_settings().add_to(k, s, Shapes::What::Kept, "material");
   return k.hex();
 }
 
@@ -39,13 +38,13 @@ std::string light_key(const Scene& scene, const LblSettings& s) {
     for (int c = 0; c < 3; ++c)
       k.add("position", l.position[c]).add("direction", l.direction[c]).add("color", l.color[c]);
   }
-  k.add("rays", s.rays).add("step", s.step).add("cutoff", s.cutoff).add("interleave", s.interleave);
+  lbl_settings().add_to(k, s, Shapes::What::Kept, "lights");
   return k.hex();
 }
 
 std::string diffusion_key(const LblSettings& s) {
   BakeKey k;
-  k.add("tolerance", s.tolerance).add("max_steps", s.max_steps).add("check_every", s.check_every);
+  lbl_settings().add_to(k, s, Shapes::What::Kept, "diffusion");
   return k.hex();
 }
 
@@ -73,32 +72,6 @@ void check_lattice_size(const Scene& scene, const LblSettings& s, int margin, ui
 }
 
 }  // namespace
-
-LblSettings LblSettings::read(const Settings& settings) {
-  SettingsReader r(settings, "lbl");
-  LblSettings s;
-  s.rays = r.number("rays", s.rays, 0.25, 8);
-  s.step = r.number("step", s.step, 0.05, 2);
-  s.smooth = r.number("smooth", s.smooth, 0, 4);
-  s.cutoff = r.number("cutoff", s.cutoff, 0, 0.5);
-  s.blocked = r.integer("blocked", 0, 0, 1) == 1;
-  s.block = r.integer("block", s.block, 1, 8);
-  s.inner = r.integer("inner", s.inner, 1, 16);
-  s.directions = r.integer("directions", s.directions, 6, 18);
-  if (s.directions != 6 && s.directions != 18)
-    throw ValidationError("settings.directions", "must be 6 or 18, got " + std::to_string(s.directions));
-  s.tolerance = r.number("tolerance", s.tolerance, 1e-6, 0.5);
-  s.max_steps = r.integer("max_steps", s.max_steps, 1, 1000000);
-  s.check_every = r.integer("check_every", s.check_every, 1, 1024);
-  s.warm = r.integer("warm", 1, 0, 1) == 1;
-  s.skip_multiple = r.number("skip_multiple", s.skip_multiple, 0, 1);
-  s.measure = r.integer("measure", 0, 0, 1) == 1;
-  s.interleave = r.integer("interleave", 0, 0, 4096);
-  r.finish();
-  if (s.directions == 18 && s.blocked)
-    throw ValidationError("settings.blocked", "the 18-direction lattice runs on the whole grid only (blocked 0)");
-  return s;
-}
 
 namespace lbl {
 
@@ -264,7 +237,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     d.bound = built.bound;
     d.bound_note.clear();
     d.diffuse = d.multiple && !d.tiny;
-    result.plan.stages[2] = diffuse_stage(d, s);
+    plan_stage(result.plan, "diffuse") = diffuse_stage(d, s);
   }
   lbl::State& st = *state_;
   last_steps_ = 0;
@@ -281,7 +254,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
           cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff,
           scene.medium.g, st.deposit, st.source, *st.lattice, s.interleave, per_round);
       interleaved_steps = ir.lattice_steps;
-      result.plan.stages[1].reason += "; interleaved: " + std::to_string(ir.rounds) + " rounds of " +
+      plan_stage(result.plan, "march").reason += "; interleaved: " + std::to_string(ir.rounds) + " rounds of " +
                                       std::to_string(s.interleave) + " steps, each followed by " +
                                       std::to_string(per_round) + " lattice steps";
     } else {
@@ -301,18 +274,14 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     st.diffused = true;
     st.diffusion = diffusion_key(s);
     last_steps_ = interleaved_steps + c.steps;
-    for (auto& stage : result.plan.stages)
-      if (stage.name == "diffuse")
-        stage.reason += c.converged ? "; converged in " + std::to_string(c.steps) + " steps" +
+    plan_stage(result.plan, "diffuse").reason += c.converged ? "; converged in " + std::to_string(c.steps) + " steps" +
                                           (interleaved_steps ? " after the march" : "")
                                     : "; stopped at the step bound after " + std::to_string(c.steps) +
                                           " steps (change " + short_number(c.change) + ")";
     clock.stop("diffuse");
     if (s.measure) {
       double step_ms = st.lattice->time_steps(16), copy_ms = st.lattice->time_copy(16);
-      for (auto& stage : result.plan.stages)
-        if (stage.name == "bandwidth")
-          stage.reason = "lattice step " + short_number(step_ms) + " ms = " + short_number(st.lattice->step_bytes() / step_ms / 1e6) +
+      plan_stage(result.plan, "bandwidth").reason = "lattice step " + short_number(step_ms) + " ms = " + short_number(st.lattice->step_bytes() / step_ms / 1e6) +
                          " GB/s; STREAM-like copy " + short_number(copy_ms) + " ms = " +
                          short_number(st.lattice->copy_bytes() / copy_ms / 1e6) + " GB/s";
       clock.stop("bandwidth");

@@ -33,6 +33,7 @@
 #include "pipelines/lbl/volume.hpp"
 #include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
+#include "pipelines/settings_table.hpp"
 #include "pipelines/surface/surface_pipeline.hpp"
 
 namespace scatter {
@@ -58,6 +59,8 @@ struct LblSettings {
   int interleave = 0;
   static LblSettings read(const Settings& settings);
 };
+// The settings table (pipelines/lbl/lbl_info.cpp).
+const SettingsTable<LblSettings>& lbl_settings();
 
 class LblPipeline : public Pipeline {
  public:
@@ -66,10 +69,7 @@ class LblPipeline : public Pipeline {
   static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   explicit LblPipeline(gpu::Gpu& gpu);
   ~LblPipeline() override;
-  std::string name() const override { return "lbl"; }
-  std::vector<Terms> supported_terms() const override {
-    return {Terms::Surface, Terms::Single, Terms::Multiple, Terms::All};
-  }
+  const PipelineInfo& info() const override;
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
   // Lattice steps the last diffusion took (0 when the last frame did not diffuse).

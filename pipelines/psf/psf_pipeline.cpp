@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <string>
 
 #include "pipelines/stage_clock.hpp"
 #include "scene/voxelizer.hpp"
@@ -29,19 +30,6 @@ std::string medium_fingerprint(const Scene& scene) {
 }
 
 }  // namespace
-
-PsfSettings PsfSettings::read(const Settings& settings) {
-  SettingsReader r(settings, "psf");
-  PsfSettings s;
-  s.step = r.number("step", s.step, 0.05, 4);
-  s.spacing = r.number("spacing", s.spacing, 0.1, 10);
-  s.shift = r.number("shift", s.shift, 0, 100);
-  s.atten = r.integer("atten", s.atten, 0, 2);
-  s.thin = r.number("thin", s.thin, 0, 10);
-  s.rebuild = r.integer("rebuild", 0, 0, 1) == 1;
-  r.finish();
-  return s;
-}
 
 void PsfPipeline::prepare(const Scene& scene) {
   std::string fp = medium_fingerprint(scene);
@@ -84,19 +72,15 @@ void PsfPipeline::check_memory(const Scene& scene) {
                                         mib(double(info.max_alloc)) + "): use fewer voxels or lights");
 }
 
-Plan PsfPipeline::plan(const Scene& scene, const RenderRequest& request) {
-  require_terms(*this, request.terms);
-  PsfSettings s = PsfSettings::read(request.settings);
-  check_memory(scene);
-  const bool held = medium_.cl && medium_.fingerprint == medium_fingerprint(scene);
-  prepare(scene);
+Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, const PsfSettings& s, bool held,
+                            double thickness, const std::string& thickness_note) const {
   Plan p{name(), request.terms, {}};
   p.stages.push_back({"voxelize", !held, held ? "the medium is the one already held (camera or lights changed)"
                                               : std::to_string(scene.voxels) + " voxels on the long side"});
   const bool multiple = request.terms != Terms::Single;
-  const bool thin = thickness_ < s.thin;
+  const bool thin = thickness < s.thin;
   int changed = 0;
-  for (const auto& key : light_keys(scene)) changed += medium_.lights.count(key) ? 0 : 1;
+  for (const auto& key : light_keys(scene)) changed += held && !s.rebuild && medium_.lights.count(key) ? 0 : 1;
   const int n = static_cast<int>(scene.lights.size());
   std::string lights = std::to_string(changed) + " of " + std::to_string(n) + " lights";
   p.stages.push_back({"light_volume", changed > 0,
@@ -113,8 +97,8 @@ Plan PsfPipeline::plan(const Scene& scene, const RenderRequest& request) {
   std::string ms_reason;
   if (!multiple) ms_reason = "multiple term not requested";
   else if (thin)
-    ms_reason = "optically thin (scattering thickness " + short_number(thickness_) + " < " + short_number(s.thin) +
-                "): multiple scattering is negligible";
+    ms_reason = "optically thin (scattering thickness " + short_number(thickness) + thickness_note + " < " +
+                short_number(s.thin) + "): multiple scattering is negligible";
   else
     ms_reason = "pyramid lookups at the equation-18 width, every " + short_number(s.spacing) +
                 " projected blur width; attenuation " +
@@ -126,12 +110,31 @@ Plan PsfPipeline::plan(const Scene& scene, const RenderRequest& request) {
   return p;
 }
 
+// Pure: no GPU, no voxelizing. Before the medium is voxelized its scattering thickness is
+// estimated at density 1 over the mesh's extent; render() decides with the voxels' own.
+Plan PsfPipeline::plan(const Scene& scene, const RenderRequest& request) {
+  require_terms(*this, request.terms);
+  PsfSettings s = PsfSettings::read(request.settings);
+  const bool held = medium_.cl && medium_.fingerprint == medium_fingerprint(scene);
+  if (held) return make_plan(scene, request, s, true, thickness_, "");
+  Aabb box = scene.mesh->bounds();
+  Vec3 size = box.size();
+  const double longest = std::max({size.x, size.y, size.z});
+  const double voxel = longest / scene.voxels;
+  const double ms = std::max({scene.medium.sigma_s.x, scene.medium.sigma_s.y, scene.medium.sigma_s.z});
+  return make_plan(scene, request, s, false, ms * voxel * (scene.voxels + 2), " estimated at density 1");
+}
+
 RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& request) {
   RenderResult result;
+  require_terms(*this, request.terms);
   PsfSettings s = PsfSettings::read(request.settings);
   StageClock clock(result.timings);
   if (s.rebuild) medium_.lights.clear();
-  result.plan = plan(scene, request);  // voxelizes and uploads when the medium changed
+  check_memory(scene);
+  const bool held = medium_.cl && medium_.fingerprint == medium_fingerprint(scene);
+  prepare(scene);  // voxelizes and uploads when the medium changed
+  result.plan = make_plan(scene, request, s, held, thickness_, "");
   clock.stop("voxelize");
   gpu::ClContext& cl = gpu_.cl();
   auto& queue = cl.queue();

@@ -41,8 +41,7 @@ class PsfPipeline : public Pipeline {
   // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
   static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   explicit PsfPipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
-  std::string name() const override { return "psf"; }
-  std::vector<Terms> supported_terms() const override { return {Terms::Single, Terms::Multiple, Terms::All}; }
+  const PipelineInfo& info() const override;
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 
@@ -64,6 +63,10 @@ class PsfPipeline : public Pipeline {
   // Throws ValidationError (field scene.voxels) when the volumes would not fit the device's memory.
   void check_memory(const Scene& scene);
   std::vector<std::string> light_keys(const Scene& scene) const;
+  // The stages for this scene and request given whether the medium is held and its scattering
+  // thickness (`note` says how that was known).
+  Plan make_plan(const Scene& scene, const RenderRequest& request, const PsfSettings& s, bool held,
+                 double thickness, const std::string& note) const;
 
   gpu::Gpu& gpu_;
   Medium medium_;

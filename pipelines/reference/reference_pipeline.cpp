@@ -37,18 +37,6 @@ void finish_estimate(const std::vector<float>& sum, const std::vector<float>& su
 
 }  // namespace
 
-ReferenceSettings ReferenceSettings::read(const Settings& settings) {
-  SettingsReader r(settings, "reference");
-  ReferenceSettings s;
-  s.spp = r.integer("spp", s.spp, 3, 1 << 20);  // one channel per sample: 3 for a colour
-  s.step = r.number("step", s.step, 1e-3, 4);
-  s.seed = static_cast<uint32_t>(r.integer("seed", 1, 0, 1 << 30));
-  s.max_depth = r.integer("max_depth", s.max_depth, 1, 1 << 20);
-  s.mc = r.integer("mc", 0, 0, 1) == 1;
-  r.finish();
-  return s;
-}
-
 Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   ReferenceSettings s = ReferenceSettings::read(request.settings);

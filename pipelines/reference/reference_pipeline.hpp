@@ -31,10 +31,7 @@ class ReferencePipeline : public Pipeline {
   // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
   static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   explicit ReferencePipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
-  std::string name() const override { return "reference"; }
-  std::vector<Terms> supported_terms() const override {
-    return {Terms::Single, Terms::Multiple, Terms::All};
-  }
+  const PipelineInfo& info() const override;
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 

@@ -24,26 +24,12 @@ constexpr int kMaxShell = kSingleGridMargin - 1;
 
 }  // namespace
 
-SingleBakeParams SingleBakeParams::read(SettingsReader& r) {
-  SingleBakeParams p;
-  p.directions = r.integer("directions", p.directions, 8, 1024);
-  p.samples = r.integer("samples", p.samples, 16, 400'000);
-  p.sh_bands = r.integer("sh_order", p.sh_bands, 2, kMaxShBands);
-  p.sh_depth = r.integer("sh_depth", p.sh_depth ? 1 : 0, 0, 1) == 1;
-  p.radius = r.number("radius", p.radius, 0.2, 2.0);
-  p.candidates = r.integer("candidates", p.candidates, 2, 10);
-  p.density_guide = r.integer("density_guide", p.density_guide ? 1 : 0, 0, 1) == 1;
-  p.weight_fit = r.integer("weight_fit", p.weight_fit, 0, 200);
-  p.sigma_fit = r.integer("sigma_fit", p.sigma_fit, 0, 16);
-  p.split = r.number("split", p.split, 0.0, 1000.0);
-  if (p.split > 0 && p.split < 1.5) throw ValidationError("settings.split", "split must be 0 (off) or at least 1.5");
-  p.adapt = r.number("adapt", p.adapt, 0.0, 1.0);
-  p.seed = static_cast<uint32_t>(r.integer("seed", int(p.seed), 0, 1 << 30));
+void SingleBakeParams::check() const {
+  if (split > 0 && split < 1.5) throw ValidationError("settings.split", "split must be 0 (off) or at least 1.5");
   // The elimination keeps ~25 neighbours per candidate: bound the candidates' memory (~1 GB).
-  if (double(p.samples) * p.candidates > 2.5e6)
+  if (double(samples) * candidates > 2.5e6)
     throw ValidationError("settings.candidates", "samples x candidates must not exceed 2500000 (got " +
-                                                     std::to_string(p.samples) + " x " + std::to_string(p.candidates) + ")");
-  return p;
+                                                     std::to_string(samples) + " x " + std::to_string(candidates) + ")");
 }
 
 std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<Vec3>& dirs,
@@ -328,9 +314,9 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
 
   // 5. Spherical harmonics of the optical depth (or transmittance) per sample and channel, in
   //    chunks that keep the depth table under ~64 MB.
-  const int nc = sh_count(p.sh_bands);
+  const int nc = sh_count(p.sh_order);
   std::vector<float> basis(dirs.size() * nc);
-  for (size_t k = 0; k < dirs.size(); ++k) sh_basis(dirs[k], p.sh_bands, &basis[k * nc]);
+  for (size_t k = 0; k < dirs.size(); ++k) sh_basis(dirs[k], p.sh_order, &basis[k * nc]);
   bake.sh.assign(size_t(n) * 3 * nc, 0.f);
   const size_t chunk = std::clamp<size_t>((16u << 20) / (dirs.size() * 3), 1, std::max(1, n / 8));
   const double w = 4 * std::numbers::pi / double(dirs.size());

@@ -22,7 +22,7 @@
 //              sigma_s is the Gaussian-weighted mean of the medium around it on its side, then
 //              `sigma_fit` (8) passes fit the splatted field to the voxels
 //   sh         exact optical depth per channel from every sample along every direction (DDA),
-//              projected onto `sh_bands`^2 real spherical harmonics: of exp(-tau) (the paper, the
+//              projected onto `sh_order`^2 real spherical harmonics: of exp(-tau) (the paper, the
 //              default) or of tau itself, clamped to 20, exponentiated when rendering (`sh_depth`
 //              1). The second loses: the ringing of a band-limited tau near a face, clamped at
 //              zero, darkens the directions that matter most (docs/BENCHMARKS.md)
@@ -45,7 +45,7 @@ constexpr int kSingleGridMargin = 4;
 struct SingleBakeParams {
   int directions = 128;
   int samples = 25000;
-  int sh_bands = 5;        // 2..8: 4..64 coefficients per channel ("sh_order"; the paper: up to 5)
+  int sh_order = 5;        // bands, 2..8: 4..64 coefficients per channel (the paper: up to 5)
   bool sh_depth = false;   // project the optical depth (true) or the transmittance (false)
   double radius = 0.5;     // Gaussian sigma / local spacing
   int candidates = 5;      // candidates per sample for the elimination
@@ -55,9 +55,9 @@ struct SingleBakeParams {
   int sigma_fit = 8;           // passes fitting each sample's sigma_s so the splatted field matches the voxels
   double adapt = 0.5;          // relative radius (2 - 1.5 t)^adapt from rho's rank t: 1 the paper's [r/2, 2r], 0 uniform
   uint32_t seed = 1;
-  // Reads directions, samples, sh_order, sh_depth, radius, candidates, density_guide, weight_fit,
-  // split, sigma_fit, adapt, seed from `r`.
-  static SingleBakeParams read(SettingsReader& r);
+  // The rules across settings (split's lower bound, samples x candidates); the settings table
+  // (pipelines/single/single_info.cpp) checks each one's range.
+  void check() const;
 };
 
 struct SingleBake {
@@ -71,12 +71,12 @@ struct SingleBake {
   std::vector<float> sigma_s;   // 3 per sample
   std::vector<float> plane;     // 4 per sample: it counts where n . x <= d (xyz n, w d); zeros: everywhere
   int split = 0;                // samples split in two at a jump (count includes the extra pieces)
-  std::vector<float> sh;        // per sample, per channel, sh_bands^2 coefficients
+  std::vector<float> sh;        // per sample, per channel, sh_order^2 coefficients
   // Sum of the Gaussians at the voxel centres inside: mean and relative standard deviation.
   double coverage_mean = 0, coverage_spread = 0;
   std::vector<StageTime> timings;
 
-  size_t coefficients() const { return size_t(params.sh_bands) * params.sh_bands; }
+  size_t coefficients() const { return size_t(params.sh_order) * params.sh_order; }
   std::string serialize() const;
   // Throws std::runtime_error if `bytes` is not a complete bake of this format.
   static SingleBake deserialize(const std::string& bytes);

@@ -15,7 +15,7 @@ namespace {
 // Peak of the bake: voxel-sized arrays alive in make_gaussians (its accumulators are per thread).
 void bake_memory(cost::Ledger& l, const cost::GridShape& g, const SingleBakeParams& p,
                  size_t threads) {
-  const double n = g.count(), samples = p.samples, nc = sh_count(p.sh_bands);
+  const double n = g.count(), samples = p.samples, nc = sh_count(p.sh_order);
   const std::string grid = g.text() + " voxels";
   // VoxelGrid 29 B; bake_single's moment 12, rho 4, q 4, layer 1, anchor 8, cdf 8 (doubles);
   // make_gaussians: sum + partial (a double per voxel per thread), field + fpart (3 doubles per
@@ -45,7 +45,7 @@ CostEstimate SinglePipeline::estimate(const Scene& scene, const RenderRequest& r
   const SingleBakeParams& p = s.bake;
   const GridShape g = grid_shape(scene, kSingleGridMargin);
   const double n = g.count(), px = double(scene.width) * scene.height;
-  const double samples = p.samples, nc = sh_count(p.sh_bands), side = std::max({g.nx, g.ny, g.nz});
+  const double samples = p.samples, nc = sh_count(p.sh_order), side = std::max({g.nx, g.ny, g.nz});
   const size_t threads = std::max(1u, std::thread::hardware_concurrency());
   const std::string grid = g.text() + " voxels";
 

@@ -14,19 +14,6 @@
 
 namespace scatter {
 
-SingleSettings SingleSettings::read(const Settings& settings) {
-  SettingsReader r(settings, "single");
-  SingleSettings s;
-  s.bake = SingleBakeParams::read(r);
-  s.clip_back = r.integer("clip_back", 1, 0, 1) == 1;
-  s.exact_tr = r.integer("exact_tr", 1, 0, 1) == 1;
-  s.tr_gradient = r.integer("tr_gradient", 1, 0, 1) == 1;
-  s.tr_gradient_max = r.number("tr_gradient_max", 2.0, 0.0, 4.0);
-  s.tr_hessian = r.integer("tr_hessian", 1, 0, 1) == 1;
-  r.finish();
-  return s;
-}
-
 namespace {
 
 // Bump when the bake's results change, so old cache entries are not reused.
@@ -38,16 +25,10 @@ std::string_view bytes_of(const std::vector<T>& v) {
   return {reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T)};
 }
 
-void add_params(BakeKey& key, const SingleBakeParams& p) {
-  key.add("directions", p.directions).add("samples", p.samples).add("sh_bands", p.sh_bands)
-      .add("sh_depth", p.sh_depth ? 1 : 0).add("radius", p.radius).add("candidates", p.candidates).add("density_guide", p.density_guide ? 1 : 0)
-      .add("weight_fit", p.weight_fit).add("split", p.split).add("sigma_fit", p.sigma_fit).add("adapt", p.adapt).add("seed", p.seed);
-}
-
 // Cheap identity of what the bake depends on, to skip even the voxelization when a live session
 // renders the same asset again: mesh bytes, the density object (held by Current, so its address
-// cannot be reused by another while compared), the medium and the resolution.
-std::string fingerprint(const Scene& scene, const SingleBakeParams& p) {
+// cannot be reused by another while compared), the medium, the resolution and the bake's settings.
+std::string fingerprint(const Scene& scene, const SingleSettings& settings) {
   std::string s;
   auto h = [&](std::string_view b) { s += std::to_string(std::hash<std::string_view>{}(b)) + "|"; };
   h(bytes_of(scene.mesh->positions));
@@ -55,11 +36,9 @@ std::string fingerprint(const Scene& scene, const SingleBakeParams& p) {
   s += std::to_string(reinterpret_cast<uintptr_t>(scene.medium.density.get())) + "|";
   for (const Vec3* v : {&scene.medium.sigma_s, &scene.medium.sigma_a})
     for (int c = 0; c < 3; ++c) s += exact_number((*v)[c]) + ",";
-  s += std::to_string(scene.voxels) + "|" + std::to_string(p.directions) + "|" + std::to_string(p.samples) +
-       "|" + std::to_string(p.sh_bands) + "|" + std::to_string(p.sh_depth) + "|" + exact_number(p.radius) +
-       "|" + std::to_string(p.candidates) + "|" + std::to_string(p.density_guide) + "|" + std::to_string(p.sigma_fit) + "|" + std::to_string(p.weight_fit) + "|" + exact_number(p.split) +
-       "|" + exact_number(p.adapt) + "|" + std::to_string(p.seed);
-  return s;
+  BakeKey params;
+  single_settings().add_to(params, settings, Shapes::What::Bake);
+  return s + std::to_string(scene.voxels) + "|" + params.hex();
 }
 
 gpu::GlObject storage(const std::vector<float>& data) {
@@ -86,8 +65,13 @@ SinglePipeline::~SinglePipeline() {
 Plan SinglePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   SingleSettings s = SingleSettings::read(request.settings);
-  Plan p{name(), request.terms, {}};
-  const bool same = current_.bake && current_.fingerprint == fingerprint(scene, s.bake);
+  return make_plan(scene, request.terms, s, fingerprint(scene, s));
+}
+
+Plan SinglePipeline::make_plan(const Scene& scene, Terms terms, const SingleSettings& s,
+                               const std::string& fp) const {
+  Plan p{name(), terms, {}};
+  const bool same = current_.bake && current_.fingerprint == fp;
   p.stages.push_back({"voxelize", !same, same ? "the asset is the one already baked"
                                               : std::to_string(scene.voxels) + " voxels on the long side"});
   p.stages.push_back({"bake", !same,
@@ -95,7 +79,7 @@ Plan SinglePipeline::plan(const Scene& scene, const RenderRequest& request) {
                            : "looked up by content (voxels + settings); baked on a miss: " +
                                  std::to_string(s.bake.directions) + " directions, " +
                                  std::to_string(s.bake.samples) + " samples, " +
-                                 std::to_string(s.bake.sh_bands * s.bake.sh_bands) + " SH coefficients of " +
+                                 std::to_string(s.bake.sh_order * s.bake.sh_order) + " SH coefficients of " +
                                  (s.bake.sh_depth ? "optical depth" : "transmittance")});
   p.stages.push_back({"depth_peel", true,
                       s.clip_back ? "four surfaces: the medium along each ray is [1st, 2nd] and [3rd, 4th]"
@@ -121,10 +105,14 @@ Plan SinglePipeline::plan(const Scene& scene, const RenderRequest& request) {
 
 BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request, const BakeProgress& progress) {
   SingleSettings s = SingleSettings::read(request.settings);
+  return bake(scene, s, fingerprint(scene, s), progress);
+}
+
+BakeResult SinglePipeline::bake(const Scene& scene, const SingleSettings& s, const std::string& fp,
+                                const BakeProgress& progress) {
   BakeResult r;
   r.needed = true;
   StageClock clock(r.timings);
-  std::string fp = fingerprint(scene, s.bake);
   if (!current_.bake || current_.fingerprint != fp) {
     if (progress) progress("voxelize", 0);
     auto grid_ptr = std::make_shared<const VoxelGrid>(
@@ -138,7 +126,7 @@ BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request
     key.add("voxel", grid.voxel);
     key.add_bytes("sigma_s", bytes_of(grid.sigma_s)).add_bytes("sigma_a", bytes_of(grid.sigma_a));
     key.add_bytes("occupancy", bytes_of(grid.occupancy)).add_bytes("inside", bytes_of(grid.inside));
-    add_params(key, s.bake);
+    single_settings().add_to(key, s, Shapes::What::Bake);
     std::string hex = key.hex();
     std::shared_ptr<const SingleBake> product;
     if (auto bytes = cache_->get(hex)) {
@@ -224,12 +212,14 @@ std::pair<std::vector<float>, std::vector<float>> SinglePipeline::read_moves() c
 
 RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& request) {
   RenderResult result;
-  result.plan = plan(scene, request);
-  SingleSettings s = SingleSettings::read(request.settings);
+  require_terms(*this, request.terms);
+  const SingleSettings s = SingleSettings::read(request.settings);  // once a frame
+  const std::string fp = fingerprint(scene, s);
+  result.plan = make_plan(scene, request.terms, s, fp);
   // A bake inside a render reports to the render's progress, which may stop it (a cancel).
   BakeProgress progress;
   if (request.progress) progress = [&](const std::string&, double) { request.progress(0); };
-  BakeResult baked = bake(scene, request, progress);
+  BakeResult baked = bake(scene, s, fp, progress);
   result.timings = baked.timings;
   StageClock clock(result.timings);
   gpu_.gl().make_current();
@@ -274,7 +264,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, axes_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 8, planes_.get());
   uniform1i(shade, "count", b.count);
-  uniform1i(shade, "bands", b.params.sh_bands);
+  uniform1i(shade, "bands", b.params.sh_order);
   uniform1i(shade, "depth_mode", b.params.sh_depth ? 1 : 0);
   uniform3(shade, "eye", eye);
   glProgramUniform1f(shade, glGetUniformLocation(shade, "g"), float(scene.medium.g));

@@ -31,6 +31,7 @@
 #include "gpu/gl_objects.hpp"
 #include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
+#include "pipelines/settings_table.hpp"
 #include "pipelines/single/single_bake.hpp"
 
 namespace scatter {
@@ -44,6 +45,8 @@ struct SingleSettings {
   bool tr_hessian = true;
   static SingleSettings read(const Settings& settings);
 };
+// The settings table (pipelines/single/single_info.cpp).
+const SettingsTable<SingleSettings>& single_settings();
 
 class SinglePipeline : public Pipeline {
  public:
@@ -52,15 +55,9 @@ class SinglePipeline : public Pipeline {
   static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   SinglePipeline(gpu::Gpu& gpu, BakeCache* cache);
   ~SinglePipeline() override;
-  std::string name() const override { return "single"; }
-  std::vector<Terms> supported_terms() const override { return {Terms::Single}; }
+  const PipelineInfo& info() const override;
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   BakeResult bake(const Scene& scene, const RenderRequest& request, const BakeProgress& progress = {}) override;
-  std::vector<std::pair<std::string, double>> bake_stages() const override {
-    // Shares measured on the bunny at 64^3, 128 directions, 25k samples (docs/BENCHMARKS.md).
-    return {{"voxelize", 0.03}, {"ddod", 0.3}, {"divergence", 0.01}, {"sampling", 0.1},
-            {"gaussians", 0.3}, {"sh", 0.26}};
-  }
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 
   // The product the last bake() or render() used.
@@ -87,6 +84,9 @@ class SinglePipeline : public Pipeline {
     int light_passes = 0;                         // light_tr computations so far (tests)
     bool moved = false;                           // shifts_ / axes_ hold exact_tr's last values
   };
+  // The stages of a frame with settings `s` for the asset whose fingerprint is `fp`.
+  Plan make_plan(const Scene& scene, Terms terms, const SingleSettings& s, const std::string& fp) const;
+  BakeResult bake(const Scene& scene, const SingleSettings& s, const std::string& fp, const BakeProgress& progress);
   void upload();
   // The samples' own Gaussians in shifts_ (no move) and axes_ (sigma on every axis).
   void reset_moves();

@@ -64,7 +64,7 @@ std::string SingleBake::serialize() const {
   w.put(kMagic);
   w.put<int32_t>(params.directions);
   w.put<int32_t>(params.samples);
-  w.put<int32_t>(params.sh_bands);
+  w.put<int32_t>(params.sh_order);
   w.put<int32_t>(params.sh_depth);
   w.put<double>(params.radius);
   w.put<int32_t>(params.candidates);
@@ -100,7 +100,7 @@ SingleBake SingleBake::deserialize(const std::string& bytes) {
   SingleBake b;
   b.params.directions = r.get<int32_t>();
   b.params.samples = r.get<int32_t>();
-  b.params.sh_bands = r.get<int32_t>();
+  b.params.sh_order = r.get<int32_t>();
   b.params.sh_depth = r.get<int32_t>() != 0;
   b.params.radius = r.get<double>();
   b.params.candidates = r.get<int32_t>();
@@ -112,7 +112,7 @@ SingleBake SingleBake::deserialize(const std::string& bytes) {
   b.params.seed = r.get<uint32_t>();
   b.count = r.get<int32_t>();
   b.split = r.get<int32_t>();
-  if (b.count < 0 || b.params.sh_bands < 1 || b.params.sh_bands > kMaxShBands)
+  if (b.count < 0 || b.params.sh_order < 1 || b.params.sh_order > kMaxShBands)
     throw std::runtime_error("single bake: bad header");
   b.coverage_mean = r.get<double>();
   b.coverage_spread = r.get<double>();

@@ -7,15 +7,6 @@
 
 namespace scatter {
 
-SurfaceSettings SurfaceSettings::read(const Settings& settings) {
-  SettingsReader r(settings, "surface");
-  SurfaceSettings s;
-  s.shadows = r.integer("shadows", 0, 0, 1) == 1;
-  s.shadow_size = r.integer("shadow_size", s.shadow_size, 64, 8192);
-  r.finish();
-  return s;
-}
-
 Plan SurfacePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   SurfaceSettings s = SurfaceSettings::read(request.settings);

@@ -22,8 +22,7 @@ class SurfacePipeline : public Pipeline {
   // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
   static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   explicit SurfacePipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
-  std::string name() const override { return "surface"; }
-  std::vector<Terms> supported_terms() const override { return {Terms::Surface}; }
+  const PipelineInfo& info() const override;
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 

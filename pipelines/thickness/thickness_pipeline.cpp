@@ -9,15 +9,6 @@
 
 namespace scatter {
 
-ThicknessSettings ThicknessSettings::read(const Settings& settings) {
-  SettingsReader r(settings, "thickness");
-  ThicknessSettings s;
-  s.steps = r.integer("steps", s.steps, 1, 1024);
-  s.shadow_size = r.integer("shadow_size", s.shadow_size, 64, 8192);
-  r.finish();
-  return s;
-}
-
 Plan ThicknessPipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   ThicknessSettings s = ThicknessSettings::read(request.settings);

@@ -27,8 +27,7 @@ class ThicknessPipeline : public Pipeline {
   // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
   static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
   explicit ThicknessPipeline(gpu::Gpu& gpu) : gpu_(gpu) {}
-  std::string name() const override { return "thickness"; }
-  std::vector<Terms> supported_terms() const override { return {Terms::Single}; }
+  const PipelineInfo& info() const override;
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 

@@ -34,6 +34,51 @@ TEST_F(ApiTest, HealthAndPipelines) {
   EXPECT_EQ(json(call("GET", "/api/pipelines"))["pipelines"].size(), pipeline_names().size());
 }
 
+// GET /api/pipelines is the registry: every pipeline's terms, settings table and presets.
+TEST_F(ApiTest, PipelinesCarryTheirSettingsTables) {
+  nlohmann::json list = json(call("GET", "/api/pipelines"))["pipelines"];
+  ASSERT_EQ(list.size(), pipeline_names().size());
+  for (size_t i = 0; i < list.size(); ++i) EXPECT_EQ(list[i]["name"], pipeline_names()[i]);
+  auto find = [&](const std::string& name) {
+    for (const auto& p : list)
+      if (p["name"] == name) return p;
+    return nlohmann::json();
+  };
+  nlohmann::json single = find("single");
+  EXPECT_EQ(single["terms"], nlohmann::json::array({"single"}));
+  EXPECT_TRUE(single["bakes"].get<bool>());
+  EXPECT_EQ(single["bake_stages"].size(), 6u);
+  bool samples = false;
+  for (const auto& s : single["settings"])
+    if (s["key"] == "samples") {
+      samples = true;
+      EXPECT_EQ(s["default"], 25000);
+      EXPECT_EQ(s["kind"], "integer");
+      EXPECT_EQ(s["shapes"], "bake");
+      EXPECT_FALSE(s["doc"].get<std::string>().empty());
+    }
+  EXPECT_TRUE(samples);
+  nlohmann::json lbl = find("lbl");
+  EXPECT_EQ(lbl["default_terms"], "all");
+  for (const auto& s : lbl["settings"])
+    if (s["key"] == "directions") EXPECT_EQ(s["allowed"], nlohmann::json::array({6, 18}));
+  EXPECT_EQ(find("auto")["delegates"], nlohmann::json::array({"thickness", "reference"}));
+  EXPECT_FALSE(find("psf")["bakes"].get<bool>());
+}
+
+// A setting is checked at the edge against the table, whatever pipeline auto would pick.
+TEST_F(ApiTest, SettingsAreCheckedAtTheEdge) {
+  HttpResponse r = call("POST", "/api/render", R"({"scene_name": "sphere", "pipeline": "single", "settings": {"sampels": 10}})");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(json(r)["field"], "settings.sampels");
+  r = call("POST", "/api/render", R"({"scene_name": "sphere", "pipeline": "auto", "settings": {"spp": 2}})");
+  EXPECT_EQ(r.status, 400);  // below reference's range, though auto picks thickness for the sphere's single term
+  EXPECT_EQ(json(r)["field"], "settings.spp");
+  r = call("POST", "/api/bakes", R"({"scene_name": "sphere", "pipeline": "psf"})");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_NE(json(r)["error"].get<std::string>().find("needs no bake"), std::string::npos);
+}
+
 TEST_F(ApiTest, UnknownRoutesMethodsAndBodiesAreClearErrors) {
   HttpResponse r = call("GET", "/api/nothing");
   EXPECT_EQ(r.status, 404);

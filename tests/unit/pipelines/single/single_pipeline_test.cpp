@@ -146,7 +146,7 @@ TEST(SingleBake, SerializationRoundTripsAndRejectsDamage) {
   SingleBakeParams p;
   p.samples = 500;
   p.directions = 16;
-  p.sh_bands = 3;
+  p.sh_order = 3;
   SingleBake b = bake_single(test::shared_gpu().cl(), grid, p);
   std::string bytes = b.serialize();
   SingleBake c = SingleBake::deserialize(bytes);
@@ -169,7 +169,7 @@ TEST_F(SinglePipelineTest, ShadePassMatchesCpu) {
   ASSERT_EQ(shaded.size(), size_t(b.count) * 4);
   const int nc = int(b.coefficients());
   auto psi = [&](int i, int c, const Vec3& d) {
-    double v = sh_eval(&b.sh[(size_t(i) * 3 + c) * nc], d, b.params.sh_bands);
+    double v = sh_eval(&b.sh[(size_t(i) * 3 + c) * nc], d, b.params.sh_order);
     return b.params.sh_depth ? std::exp(-std::max(0.0, v)) : std::clamp(v, 0.0, 1.0);
   };
   auto hg = [&](double cos_t) {
