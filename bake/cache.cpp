@@ -1,6 +1,5 @@
 #include "bake/cache.hpp"
 
-#include <openssl/evp.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -16,8 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-using Digest = std::array<unsigned char, 32>;
-
 // File layout, all integers little-endian:
 //   magic "SCATBAKE" (8) | format version u32 | payload size u64 | key (32, the hex decoded) |
 //   SHA-256 of payload (32) | payload
@@ -25,26 +22,6 @@ using Digest = std::array<unsigned char, 32>;
 // copy, a rename, a sync tool's mix-up) is not served as this key's product.
 constexpr std::string_view kMagic = "SCATBAKE";
 constexpr size_t kKeyAt = 8 + 4 + 8, kChecksumAt = kKeyAt + 32, kHeaderSize = kChecksumAt + 32;
-
-Digest sha256(std::string_view bytes) {
-  Digest d;
-  unsigned int len = 0;
-  if (EVP_Digest(bytes.data(), bytes.size(), d.data(), &len, EVP_sha256(), nullptr) != 1 ||
-      len != d.size())
-    throw std::runtime_error("SHA-256 failed (OpenSSL EVP_Digest)");
-  return d;
-}
-
-std::string to_hex(const Digest& d) {
-  static constexpr char kDigits[] = "0123456789abcdef";
-  std::string hex;
-  hex.reserve(2 * d.size());
-  for (unsigned char c : d) {
-    hex += kDigits[c >> 4];
-    hex += kDigits[c & 15];
-  }
-  return hex;
-}
 
 Digest to_digest(std::string_view bytes) {
   Digest d{};
@@ -127,10 +104,6 @@ void check_key(const std::string& key_hex) {
 }
 
 }  // namespace
-
-std::string sha256_hex(std::string_view bytes) {
-  return to_hex(sha256(bytes));
-}
 
 bool is_bake_key(std::string_view key_hex) {
   if (key_hex.size() != 64) return false;

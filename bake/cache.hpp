@@ -14,14 +14,13 @@
 #include <string_view>
 #include <unordered_map>
 
+#include "protocol/digest.hpp"
+
 namespace scatter {
 
 // Part of every key and of every file header: bump it when a product's or the file's layout
 // changes, and old keys (and files) stop matching. 2: the header names the file's key.
 inline constexpr uint32_t kBakeFormatVersion = 2;
-
-// SHA-256 of bytes, lowercase hex (64 chars). Uses OpenSSL EVP.
-std::string sha256_hex(std::string_view bytes);
 
 // True for exactly 64 lowercase hex characters: the only names BakeCache accepts.
 bool is_bake_key(std::string_view key_hex);

@@ -121,7 +121,9 @@ nlohmann::json BakeJob::status() const {
   return j;
 }
 
-std::string BakeJobs::id_for(const std::string& identity) { return sha256_hex(identity).substr(0, 16); }
+std::string BakeJobs::id_for(const std::string& identity) {
+  return is_bake_key(identity) ? identity : sha256_hex(identity).substr(0, 16);
+}
 
 std::shared_ptr<BakeJob> BakeJobs::submit(const std::string& identity, const std::string& pipeline,
                                           std::vector<std::pair<std::string, double>> stage_weights,

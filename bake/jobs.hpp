@@ -82,7 +82,8 @@ class BakeJobs {
   // Jobs in each state, for metrics.
   std::map<std::string, int> counts() const;
 
-  // The job id for an identity: 16 hex digits of its SHA-256.
+  // The job id for an identity: a product's bake key is its own id (the job is named by what it
+  // makes); any other text gets 16 hex digits of its SHA-256.
   static std::string id_for(const std::string& identity);
 
  private:

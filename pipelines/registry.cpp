@@ -79,6 +79,13 @@ std::string cell(double v, SettingKind k) {
   return buf;
 }
 
+// A table cell's text: a '|' would end the cell.
+std::string escaped(const std::string& text) {
+  std::string out;
+  for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+  return out;
+}
+
 }  // namespace
 
 std::string settings_markdown(const PipelineInfo& p) {
@@ -98,7 +105,7 @@ std::string settings_markdown(const PipelineInfo& p) {
     std::string shapes = to_string(s.shapes.what);
     if (s.shapes.what == Shapes::What::Kept) shapes += " (" + s.shapes.state + ")";
     md << "| `" << s.key << "` | " << to_string(s.kind) << " | " << cell(s.def, s.kind) << " | " << range
-       << " | " << shapes << " | " << s.doc << " |\n";
+       << " | " << shapes << " | " << escaped(s.doc) << " |\n";
   }
   return md.str();
 }

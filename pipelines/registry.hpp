@@ -37,6 +37,9 @@ struct PipelineInfo {
   // Throws ValidationError for a setting render() would reject (unknown key, range, kind, rule).
   std::function<void(const Settings&)> validate;
   std::vector<std::pair<std::string, double>> bake_stages;  // empty: it bakes nothing
+  // The key of the product a bake of the scene with these settings makes (pipelines that bake):
+  // the bake job's id, known before the job runs.
+  std::function<std::string(const Scene&, const Settings&)> bake_key;
   std::vector<Quality> qualities;
   std::vector<std::string> delegates;  // auto: the pipelines it may choose
   std::function<std::unique_ptr<Pipeline>(gpu::Gpu&, BakeCache*)> make;

@@ -60,6 +60,8 @@ class JsonObject {
 
   // Throws for the first key that was never read.
   void finish() const;
+  // The object itself (its canonical dump identifies what it describes).
+  const nlohmann::json& value() const { return value_; }
 
  private:
   const nlohmann::json* find(std::string_view key, bool required);

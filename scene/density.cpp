@@ -1,8 +1,11 @@
 #include "scene/density.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <numbers>
+
+#include "protocol/digest.hpp"
 
 namespace scatter {
 namespace {
@@ -57,6 +60,16 @@ class GridDensity : public DensityField {
  public:
   GridDensity(int nx, int ny, int nz, Aabb box, std::vector<float> data)
       : n_{nx, ny, nz}, box_(box), data_(std::move(data)) {}
+  // SHA-256 of the dimensions, the box and the data.
+  std::string digest() const {
+    std::string head;
+    char buf[64];
+    for (int a = 0; a < 3; ++a) {
+      std::snprintf(buf, sizeof buf, "%d %.17g %.17g ", n_[a], box_.lo[a], box_.hi[a]);
+      head += buf;
+    }
+    return sha256_hex(head + std::string(reinterpret_cast<const char*>(data_.data()), data_.size() * sizeof(float)));
+  }
   // Trilinear between voxel centres; zero outside the grid's box.
   double density(const Vec3& p) const override {
     Vec3 size = box_.size();
@@ -103,7 +116,7 @@ class BlockerDensity : public DensityField {
   std::shared_ptr<const DensityField> inner_;
 };
 
-std::shared_ptr<const DensityField> load_grid(JsonObject& obj, const std::filesystem::path& base_dir,
+std::shared_ptr<GridDensity> load_grid(JsonObject& obj, const std::filesystem::path& base_dir,
                                               const GridLimits& limits) {
   std::filesystem::path header_path = base_dir / obj.string("file", std::nullopt);
   // A regular file of bounded size: a FIFO or a device named here would block or never end.
@@ -208,7 +221,8 @@ std::shared_ptr<const DensityField> parse_density(JsonObject& obj,
   constexpr Range kDensity{0, 1e6};
   std::string type =
       obj.choice("type", {"constant", "layers", "noise", "grid", "blocker"}, "constant");
-  std::shared_ptr<const DensityField> field;
+  std::shared_ptr<DensityField> field;
+  std::string grid_digest;  // a grid's data
   if (type == "constant") {
     field = std::make_shared<ConstantDensity>(obj.number("value", 1.0, kDensity));
   } else if (type == "layers") {
@@ -227,7 +241,9 @@ std::shared_ptr<const DensityField> parse_density(JsonObject& obj,
     auto seed = static_cast<unsigned>(obj.integer("seed", 1, {0, 1e9}));
     field = std::make_shared<NoiseDensity>(scale, octaves, lo, hi, marble, seed);
   } else if (type == "grid") {
-    field = load_grid(obj, base_dir, limits);
+    auto grid = load_grid(obj, base_dir, limits);
+    grid_digest = grid->digest();
+    field = std::move(grid);
   } else {
     JsonObject shape_obj = obj.object("shape");
     Shape shape = Shape::parse(shape_obj);
@@ -240,6 +256,7 @@ std::shared_ptr<const DensityField> parse_density(JsonObject& obj,
     }
     field = std::make_shared<BlockerDensity>(shape, sigma_a, std::move(inner));
   }
+  field->set_id(sha256_hex("density " + obj.value().dump() + " " + grid_digest));
   return field;
 }
 

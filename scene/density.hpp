@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "protocol/json_reader.hpp"
@@ -26,6 +27,13 @@ class DensityField {
   virtual double blocker_sigma_a() const { return 0; }
   // True when density() is the same everywhere and nothing is blocked.
   virtual bool homogeneous() const { return false; }
+  // What the field is, as a content address: the SHA-256 of its canonical JSON (and of a grid's
+  // data), set by parse_density; empty for a field made in code.
+  const std::string& id() const { return id_; }
+  void set_id(std::string id) { id_ = std::move(id); }
+
+ private:
+  std::string id_;
 };
 
 struct GridLimits {

@@ -6,6 +6,8 @@
 #include <map>
 #include <unordered_map>
 
+#include "protocol/digest.hpp"
+
 namespace scatter {
 
 Aabb Mesh::bounds() const {
@@ -87,6 +89,12 @@ WatertightReport check_watertight(const Mesh& mesh) {
     else if (u.direction != 0) ++report.misoriented_edges;
   }
   return report;
+}
+
+std::string mesh_digest(const Mesh& mesh) {
+  std::string bytes(reinterpret_cast<const char*>(mesh.positions.data()), mesh.positions.size() * sizeof(Vec3));
+  bytes.append(reinterpret_cast<const char*>(mesh.indices.data()), mesh.indices.size() * sizeof(uint32_t));
+  return sha256_hex(bytes);
 }
 
 }  // namespace scatter

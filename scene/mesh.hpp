@@ -28,6 +28,9 @@ struct Mesh {
   void orient_outwards();
 };
 
+// SHA-256 of the positions and indices: the mesh's identity.
+std::string mesh_digest(const Mesh& mesh);
+
 struct WatertightReport {
   size_t boundary_edges = 0;     // edges used by one triangle only (holes)
   size_t nonmanifold_edges = 0;  // edges used by more than two triangles

@@ -123,6 +123,7 @@ Scene parse_scene(const nlohmann::json& json, const std::filesystem::path& base_
   JsonObject root(json, "scene");
   Scene scene;
   parse_mesh(root.object("mesh"), base_dir, scene);
+  scene.mesh_id = mesh_digest(*scene.mesh);
   scene.medium = parse_medium(root.object("medium"), base_dir);
   scene.lights = parse_lights(root.array("lights", 0, static_cast<size_t>(limits.max_lights)),
                               root.path("lights"), limits);

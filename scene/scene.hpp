@@ -69,6 +69,9 @@ struct Scene {
   // What is rasterised; watertight. Shared: the frames of a session, and requests for the same
   // scene, hold one mesh.
   std::shared_ptr<const Mesh> mesh = std::make_shared<const Mesh>();
+  // mesh_digest(*mesh), computed once by parse_scene and carried with the mesh; empty for a
+  // scene built in code (asset_key then hashes the mesh itself).
+  std::string mesh_id;
   std::optional<Shape> shape;  // the exact solid when the mesh came from a procedural shape
   Medium medium;
   std::vector<Light> lights;

@@ -11,33 +11,12 @@
 
 namespace scatter::server {
 
-// What a bake depends on in a scene: the solid, the medium and the grid resolution (not the camera,
-// lights or image size), as canonical JSON.
-namespace {
-
-nlohmann::json bake_identity(const nlohmann::json& scene) {
-  nlohmann::json id = nlohmann::json::object();
-  for (const char* k : {"mesh", "medium", "voxels"})
-    if (scene.is_object() && scene.contains(k)) id[k] = scene[k];
-  return id;
-}
-
-}  // namespace
-
 HttpResponse Api::create_bake(const std::string& body) {
   nlohmann::json request = parse_json(body, "body");
   if (request.is_object() && !request.contains("pipeline")) request["pipeline"] = "single";
   JsonObject r(request, "");
   RenderSpec spec = read_render_spec(r, request, options_, scenes_);
   r.finish();
-  // The scene's JSON, for the job's identity.
-  nlohmann::json scene_json;
-  if (request.contains("scene")) {
-    scene_json = request["scene"];
-  } else {
-    std::ifstream in(options_.scenes_dir / (request["scene_name"].get<std::string>() + ".json"));
-    scene_json = nlohmann::json::parse(in, nullptr, false);
-  }
   std::shared_ptr<const Scene> scene = spec.scene;
   const std::string pipeline = spec.pipeline;
   const Settings settings = spec.settings;
@@ -49,9 +28,10 @@ HttpResponse Api::create_bake(const std::string& body) {
   const std::vector<std::pair<std::string, double>> stages = info.bake_stages;
   const Terms terms = info.default_terms;
   check_cost(options_, pipeline, *scene, "", settings, true);
-  nlohmann::json identity = {{"pipeline", pipeline}, {"settings", settings}, {"scene", bake_identity(scene_json)}};
+  // The job is named by the key of the product it makes (BakeJobs takes a bake key as the id).
+  const std::string identity = info.bake_key(*scene, settings);
   bool created = false;
-  auto job = bakes_.submit(identity.dump(), pipeline, stages, [&](std::shared_ptr<BakeJob> j) {
+  auto job = bakes_.submit(identity, pipeline, stages, [&](std::shared_ptr<BakeJob> j) {
     spdlog::info("event=bake_queued id={} pipeline={}", j->id(), pipeline);
     RenderQueue::Job work;
     // On the bake queue's own thread and GPU contexts: live sessions' frames do not wait for it.

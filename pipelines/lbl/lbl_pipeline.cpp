@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "bake/cache.hpp"
+#include "pipelines/asset_key.hpp"
 #include "pipelines/cl_scene.hpp"
 #include "pipelines/lbl/interleave.hpp"
 #include "pipelines/lbl/light_rays.hpp"
@@ -12,20 +13,11 @@
 namespace scatter {
 namespace {
 
-template <class T>
-std::string_view bytes_of(const std::vector<T>& v) {
-  return {reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T)};
-}
-
 // What the material volume and the lattice depend on: the asset, its medium, the grid, and the
 // settings that shape them (not the lights, not the camera).
 std::string material_key(const Scene& scene, const LblSettings& s) {
-  BakeKey k;
-  k.add_bytes("positions", bytes_of(scene.mesh->positions)).add_bytes("indices", bytes_of(scene.mesh->indices));
-  // The density object is held by the state while compared, so its address is not reused.
-  k.add("density", std::to_string(reinterpret_cast<uintptr_t>(scene.medium.density.get())));
-  for (int c = 0; c < 3; ++c) k.add("sigma_s", scene.medium.sigma_s[c]).add("sigma_a", scene.medium.sigma_a[c]);
-  k.add("g", scene.medium.g).add("ior", scene.medium.ior).add("voxels", scene.voxels);
+  BakeKey k = asset_key(scene);
+  k.add("g", scene.medium.g).add("ior", scene.medium.ior);
   lbl_settings().add_to(k, s, Shapes::What::Kept, "material");
   return k.hex();
 }

@@ -6,27 +6,17 @@
 #include <sstream>
 #include <string>
 
+#include "pipelines/asset_key.hpp"
 #include "pipelines/stage_clock.hpp"
 #include "scene/voxelizer.hpp"
 
 namespace scatter {
 namespace {
 
-template <class T>
-std::string_view bytes_of(const std::vector<T>& v) {
-  return {reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T)};
-}
-
 std::string medium_fingerprint(const Scene& scene) {
-  std::ostringstream s;
-  s.precision(17);
-  s << std::hash<std::string_view>{}(bytes_of(scene.mesh->positions)) << '|'
-    << std::hash<std::string_view>{}(bytes_of(scene.mesh->indices)) << '|'
-    << reinterpret_cast<uintptr_t>(scene.medium.density.get()) << '|' << scene.voxels << '|'
-    << scene.medium.g;
-  for (const Vec3* v : {&scene.medium.sigma_s, &scene.medium.sigma_a})
-    for (int c = 0; c < 3; ++c) s << ',' << (*v)[c];
-  return s.str();
+  BakeKey k = asset_key(scene);
+  k.add("g", scene.medium.g);
+  return k.hex();
 }
 
 }  // namespace

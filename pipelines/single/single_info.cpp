@@ -58,6 +58,9 @@ const PipelineInfo& single_info() {
       // Shares measured on the bunny at 64^3, 128 directions, 25k samples (docs/BENCHMARKS.md).
       .bake_stages = {{"voxelize", 0.03}, {"ddod", 0.3}, {"divergence", 0.01}, {"sampling", 0.1},
                       {"gaussians", 0.3}, {"sh", 0.26}},
+      .bake_key = [](const Scene& scene, const Settings& s) {
+        return SinglePipeline::product_key(scene, single_settings().read(s));
+      },
       .qualities = {{"draft", {{"samples", 5000}, {"directions", 64}}},
                     {"normal", {}},
                     {"high", {{"samples", 100000}, {"directions", 256}}}}});

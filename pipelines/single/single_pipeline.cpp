@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "bake/cache.hpp"
+#include "pipelines/asset_key.hpp"
 #include "pipelines/cl_scene.hpp"
 #include "pipelines/stage_clock.hpp"
 #include "pipelines/surface/raster.hpp"
@@ -20,26 +21,20 @@ namespace {
 constexpr const char* kSingleBakeVersion = "single-7";
 
 
-template <class T>
-std::string_view bytes_of(const std::vector<T>& v) {
-  return {reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T)};
+
+}  // namespace
+
+// The product's key, from the asset's identity (pipelines/asset_key.hpp) and the settings that
+// shape the bake: known before anything is voxelized, so a live session's frame of the same asset
+// skips the voxelization, and a bake job is named by what it will make.
+std::string SinglePipeline::product_key(const Scene& scene, const SingleSettings& settings) {
+  BakeKey key = asset_key(scene);
+  key.add("pipeline", "single").add("version", kSingleBakeVersion).add("margin", kSingleGridMargin);
+  single_settings().add_to(key, settings, Shapes::What::Bake);
+  return key.hex();
 }
 
-// Cheap identity of what the bake depends on, to skip even the voxelization when a live session
-// renders the same asset again: mesh bytes, the density object (held by Current, so its address
-// cannot be reused by another while compared), the medium, the resolution and the bake's settings.
-std::string fingerprint(const Scene& scene, const SingleSettings& settings) {
-  std::string s;
-  auto h = [&](std::string_view b) { s += std::to_string(std::hash<std::string_view>{}(b)) + "|"; };
-  h(bytes_of(scene.mesh->positions));
-  h(bytes_of(scene.mesh->indices));
-  s += std::to_string(reinterpret_cast<uintptr_t>(scene.medium.density.get())) + "|";
-  for (const Vec3* v : {&scene.medium.sigma_s, &scene.medium.sigma_a})
-    for (int c = 0; c < 3; ++c) s += exact_number((*v)[c]) + ",";
-  BakeKey params;
-  single_settings().add_to(params, settings, Shapes::What::Bake);
-  return s + std::to_string(scene.voxels) + "|" + params.hex();
-}
+namespace {
 
 gpu::GlObject storage(const std::vector<float>& data) {
   auto b = gpu::GlObject::create(gpu::GlKind::Buffer);
@@ -65,7 +60,7 @@ SinglePipeline::~SinglePipeline() {
 Plan SinglePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   SingleSettings s = SingleSettings::read(request.settings);
-  return make_plan(scene, request.terms, s, fingerprint(scene, s));
+  return make_plan(scene, request.terms, s, product_key(scene, s));
 }
 
 Plan SinglePipeline::make_plan(const Scene& scene, Terms terms, const SingleSettings& s,
@@ -105,7 +100,7 @@ Plan SinglePipeline::make_plan(const Scene& scene, Terms terms, const SingleSett
 
 BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request, const BakeProgress& progress) {
   SingleSettings s = SingleSettings::read(request.settings);
-  return bake(scene, s, fingerprint(scene, s), progress);
+  return bake(scene, s, product_key(scene, s), progress);
 }
 
 BakeResult SinglePipeline::bake(const Scene& scene, const SingleSettings& s, const std::string& fp,
@@ -119,15 +114,7 @@ BakeResult SinglePipeline::bake(const Scene& scene, const SingleSettings& s, con
         voxelize(scene, {.resolution = scene.voxels, .margin = kSingleGridMargin}));
     const VoxelGrid& grid = *grid_ptr;
     clock.stop("voxelize");
-    BakeKey key;
-    key.add("pipeline", "single").add("version", kSingleBakeVersion);
-    key.add("dims", std::to_string(grid.nx) + "x" + std::to_string(grid.ny) + "x" + std::to_string(grid.nz));
-    key.add("origin.x", grid.origin.x).add("origin.y", grid.origin.y).add("origin.z", grid.origin.z);
-    key.add("voxel", grid.voxel);
-    key.add_bytes("sigma_s", bytes_of(grid.sigma_s)).add_bytes("sigma_a", bytes_of(grid.sigma_a));
-    key.add_bytes("occupancy", bytes_of(grid.occupancy)).add_bytes("inside", bytes_of(grid.inside));
-    single_settings().add_to(key, s, Shapes::What::Bake);
-    std::string hex = key.hex();
+    const std::string& hex = fp;
     std::shared_ptr<const SingleBake> product;
     if (auto bytes = cache_->get(hex)) {
       try {
@@ -214,7 +201,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   RenderResult result;
   require_terms(*this, request.terms);
   const SingleSettings s = SingleSettings::read(request.settings);  // once a frame
-  const std::string fp = fingerprint(scene, s);
+  const std::string fp = product_key(scene, s);
   result.plan = make_plan(scene, request.terms, s, fp);
   // A bake inside a render reports to the render's progress, which may stop it (a cancel).
   BakeProgress progress;

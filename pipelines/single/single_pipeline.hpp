@@ -53,6 +53,8 @@ class SinglePipeline : public Pipeline {
   // What render() (bake: bake()) of `scene` will cost, without a GPU or an instance
   // (pipelines/cost.hpp); throws ValidationError for settings render() would reject.
   static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
+  // The key the bake of `scene` with `settings` is cached under (and its bake job named by).
+  static std::string product_key(const Scene& scene, const SingleSettings& settings);
   SinglePipeline(gpu::Gpu& gpu, BakeCache* cache);
   ~SinglePipeline() override;
   const PipelineInfo& info() const override;
@@ -72,7 +74,7 @@ class SinglePipeline : public Pipeline {
 
  private:
   struct Current {
-    std::string fingerprint, key;
+    std::string fingerprint, key;  // both the product key (kept apart for the plan's text)
     std::shared_ptr<const SingleBake> bake;
     std::shared_ptr<const DensityField> density;  // keeps the fingerprinted address taken
     std::shared_ptr<const VoxelGrid> grid;        // the medium it was baked from (exact_tr)

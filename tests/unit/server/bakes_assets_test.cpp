@@ -59,6 +59,7 @@ TEST(ServerBakes, JobRunsToCompletionIsIdempotentAndCancels) {
     EXPECT_TRUE(status["bake_timings_ms"].contains("sh"));
     EXPECT_GE(stages.size(), 3u);  // seen mid-way, not only queued and done
     key = status["key"];
+    EXPECT_EQ(id, key);  // the job is named by the product it makes
     // The same asset and settings: the same job, already done.
     r = request(server->port(), http::verb::post, "/api/bakes", body);
     EXPECT_EQ(r.result_int(), 200);
