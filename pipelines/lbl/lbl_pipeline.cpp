@@ -3,10 +3,10 @@
 #include <cmath>
 
 #include "bake/cache.hpp"
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
+#include "pipelines/common/stage_clock.hpp"
 #include "pipelines/lbl/interleave.hpp"
 #include "pipelines/lbl/light_rays.hpp"
-#include "pipelines/stage_clock.hpp"
 #include "protocol/json_reader.hpp"
 
 namespace scatter {

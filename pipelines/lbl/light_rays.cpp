@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
 
 namespace scatter::lbl {
 namespace {

@@ -5,7 +5,7 @@
 #include <cstring>
 #include <sstream>
 
-#include "pipelines/stage_clock.hpp"
+#include "pipelines/common/stage_clock.hpp"
 #include "scene/voxelizer.hpp"
 
 namespace scatter {

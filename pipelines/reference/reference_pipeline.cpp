@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "pipelines/cl_scene.hpp"
-#include "pipelines/stage_clock.hpp"
+#include "pipelines/common/cl_scene.hpp"
+#include "pipelines/common/stage_clock.hpp"
 #include "protocol/json_reader.hpp"
 #include "scene/bvh.hpp"
 

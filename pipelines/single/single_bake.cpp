@@ -8,11 +8,11 @@
 #include <mutex>
 #include <thread>
 
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
+#include "pipelines/common/stage_clock.hpp"
 #include "pipelines/single/bake_support.hpp"
 #include "pipelines/single/sampling.hpp"
 #include "pipelines/single/sh.hpp"
-#include "pipelines/stage_clock.hpp"
 
 namespace scatter {
 using namespace single_detail;

@@ -7,9 +7,9 @@
 #include <string_view>
 
 #include "bake/cache.hpp"
-#include "pipelines/cl_scene.hpp"
-#include "pipelines/stage_clock.hpp"
-#include "pipelines/surface/raster.hpp"
+#include "pipelines/common/cl_scene.hpp"
+#include "pipelines/common/raster.hpp"
+#include "pipelines/common/stage_clock.hpp"
 #include "protocol/json_reader.hpp"
 
 namespace scatter {

@@ -3,7 +3,7 @@
 // each light's transmittance (and gradient) is kept while the light stays put.
 #include <map>
 
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
 #include "pipelines/single/single_pipeline.hpp"
 
 namespace scatter {

@@ -2,8 +2,8 @@
 
 #include <memory>
 
-#include "pipelines/stage_clock.hpp"
-#include "pipelines/surface/raster.hpp"
+#include "pipelines/common/raster.hpp"
+#include "pipelines/common/stage_clock.hpp"
 
 namespace scatter {
 

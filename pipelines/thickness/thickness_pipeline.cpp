@@ -3,8 +3,8 @@
 #include <memory>
 #include <numbers>
 
-#include "pipelines/stage_clock.hpp"
-#include "pipelines/surface/raster.hpp"
+#include "pipelines/common/raster.hpp"
+#include "pipelines/common/stage_clock.hpp"
 #include "protocol/json_reader.hpp"
 
 namespace scatter {

@@ -1,4 +1,4 @@
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
 
 #include <numbers>
 

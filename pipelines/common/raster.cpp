@@ -1,4 +1,4 @@
-#include "pipelines/surface/raster.hpp"
+#include "pipelines/common/raster.hpp"
 
 #include <cmath>
 #include <numbers>
