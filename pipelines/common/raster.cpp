@@ -121,6 +121,10 @@ void uniform_matrix(GLuint p, const std::string& name, const Mat4& m) {
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, name.c_str()), 1, GL_FALSE, m.m.data());
 }
 
+gpu::GlObject build_distance_program() {
+  return gpu::build_program("shaders/common/distance.vert", "shaders/common/distance.frag");
+}
+
 void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target, const Mat4& view,
                    const Mat4& projection, const Vec3& origin, const Vec3& direction,
                    bool along_direction, GLuint first_layer, float empty) {

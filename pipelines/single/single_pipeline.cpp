@@ -234,7 +234,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   StageClock clock(result.timings);
   gpu_.gl().make_current();
   if (!distance_program_) {
-    distance_program_ = gpu::build_program("shaders/thickness/distance.vert", "shaders/thickness/distance.frag");
+    distance_program_ = build_distance_program();
     shade_program_ = gpu::build_compute_program("shaders/single/shade.comp");
     splat_program_ = gpu::build_program("shaders/single/splat.vert", "shaders/single/splat.frag");
     empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
