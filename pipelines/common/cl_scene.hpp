@@ -1,5 +1,6 @@
-// A scene's pieces in the layout the OpenCL kernels read (kernels/reference/common.cl): lights
-// (16 floats each), the camera (12 floats), and the voxel medium with per-brick majorants.
+// A scene's pieces in the layout the OpenCL kernels read (kernels/common/: lights.cl, camera.cl,
+// dda.cl): lights (16 floats each), the camera (12 floats), and the voxel medium with per-brick
+// majorants.
 #pragma once
 
 #include <vector>

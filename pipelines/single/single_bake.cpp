@@ -8,6 +8,7 @@
 #include <mutex>
 #include <thread>
 
+#include "pipelines/common/cl_library.hpp"
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/common/stage_clock.hpp"
 #include "pipelines/single/bake_support.hpp"
@@ -18,7 +19,7 @@ namespace scatter {
 using namespace single_detail;
 namespace {
 
-const std::vector<std::string> kProgram = {"kernels/reference/common.cl", "kernels/single/bake.cl"};
+const std::vector<std::string> kProgram = with_cl_library({"kernels/single/bake.cl"});
 constexpr float kDepthClamp = 20;   // exp(-20) ~ 2e-9: deeper is dark either way
 constexpr int kMaxShell = kSingleGridMargin - 1;
 
