@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "core/errors.hpp"
 #include "gpu/cl.hpp"
-#include "gpu/error.hpp"
 
 namespace scatter::gpu {
 

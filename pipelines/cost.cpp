@@ -1,5 +1,6 @@
 #include "pipelines/cost.hpp"
 
+#include "core/errors.hpp"
 #include "pipelines/auto_pipeline.hpp"
 #include "pipelines/lbl/lbl_pipeline.hpp"
 #include "pipelines/psf/psf_pipeline.hpp"
@@ -7,7 +8,6 @@
 #include "pipelines/single/single_pipeline.hpp"
 #include "pipelines/surface/surface_pipeline.hpp"
 #include "pipelines/thickness/thickness_pipeline.hpp"
-#include "protocol/json_reader.hpp"
 
 namespace scatter {
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "core/errors.hpp"
 #include "pipelines/auto_pipeline.hpp"
 #include "pipelines/lbl/lbl_pipeline.hpp"
 #include "pipelines/psf/psf_pipeline.hpp"
@@ -13,7 +14,6 @@
 #include "pipelines/surface/surface_pipeline.hpp"
 #include "pipelines/single/single_pipeline.hpp"
 #include "pipelines/thickness/thickness_pipeline.hpp"
-#include "protocol/json_reader.hpp"
 
 namespace scatter {
 

@@ -2,7 +2,6 @@
 #include <iostream>
 
 #include "pipelines/pipeline.hpp"
-#include "protocol/json_reader.hpp"
 #include "tools/cache_option.hpp"
 #include "tools/commands.hpp"
 #include "tools/settings_option.hpp"

@@ -3,12 +3,12 @@
 #include <cmath>
 
 #include "bake/cache.hpp"
+#include "core/errors.hpp"
 #include "pipelines/common/cl_library.hpp"
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/common/stage_clock.hpp"
 #include "pipelines/lbl/interleave.hpp"
 #include "pipelines/lbl/light_rays.hpp"
-#include "protocol/json_reader.hpp"
 
 namespace scatter {
 namespace {

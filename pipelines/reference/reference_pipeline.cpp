@@ -2,10 +2,10 @@
 
 #include <cmath>
 
+#include "core/errors.hpp"
 #include "pipelines/common/cl_library.hpp"
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/common/stage_clock.hpp"
-#include "protocol/json_reader.hpp"
 #include "scene/bvh.hpp"
 
 namespace scatter {

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
+#include "core/errors.hpp"
 #include "pipelines/common/cl_library.hpp"
-#include "protocol/json_reader.hpp"
 
 namespace scatter {
 namespace {

@@ -7,10 +7,10 @@
 #include <string_view>
 
 #include "bake/cache.hpp"
+#include "core/errors.hpp"
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/common/raster.hpp"
 #include "pipelines/common/stage_clock.hpp"
-#include "protocol/json_reader.hpp"
 
 namespace scatter {
 

@@ -3,9 +3,9 @@
 #include <memory>
 #include <numbers>
 
+#include "core/errors.hpp"
 #include "pipelines/common/raster.hpp"
 #include "pipelines/common/stage_clock.hpp"
-#include "protocol/json_reader.hpp"
 
 namespace scatter {
 
