@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bake/bake_result.hpp"
 #include "gpu/gpu.hpp"
 #include "pipelines/image.hpp"
 #include "scene/scene.hpp"
@@ -38,11 +39,6 @@ struct Plan {
   std::string pipeline;
   Terms terms = Terms::All;
   std::vector<StagePlan> stages;
-};
-
-struct StageTime {
-  std::string stage;
-  double ms = 0;
 };
 
 // Numeric knobs a pipeline understands ("spp", "step", ...); each pipeline documents its own and
@@ -77,18 +73,6 @@ class SettingsReader {
   std::string pipeline_;
   std::set<std::string> used_;
 };
-
-struct BakeResult {
-  bool needed = false;             // false: this pipeline bakes nothing
-  bool cache_hit = false;          // the product came from the cache (memory or disk)
-  std::string key;                 // content address of the product
-  std::vector<StageTime> timings;  // this call's stages (a hit: the lookup only)
-  std::vector<StageTime> bake_timings;  // the stages of the bake that made the product
-  nlohmann::json stats;            // pipeline-specific facts about the product
-};
-
-// Reports progress of a bake: stage name and the fraction of that stage done.
-using BakeProgress = std::function<void(const std::string& stage, double fraction)>;
 
 class BakeCache;
 
