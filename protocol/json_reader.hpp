@@ -13,7 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
-#include "scene/vec.hpp"
+#include "core/vec.hpp"
 
 namespace scatter {
 
