@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "gpu/cl_context.hpp"
-#include "gpu/grid_ops.hpp"
+#include "pipelines/common/grid_ops.hpp"
 #include "scene/scene.hpp"
 #include "scene/voxelizer.hpp"
 
@@ -18,7 +18,7 @@ std::vector<float> pack_camera(const Camera& camera, int width, int height);
 
 struct ClMedium {
   cl::Buffer sigma_s, sigma_t, majorant;  // RGB interleaved per voxel; one majorant per brick
-  gpu::BrickGrid bricks;
+  BrickGrid bricks;
   cl_float3 origin{};
   float voxel = 0;
   int nx = 0, ny = 0, nz = 0;
