@@ -19,7 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "pipelines/pipeline.hpp"
+#include "bake/bake_result.hpp"
 
 namespace scatter {
 

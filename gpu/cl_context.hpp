@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "core/errors.hpp"
 #include "gpu/cl.hpp"
-#include "gpu/error.hpp"
 
 namespace scatter::gpu {
 
@@ -34,7 +34,7 @@ class ClContext {
   explicit ClContext(const std::string& selector = "");
 
   // Builds (once per file list and options) the kernel files, concatenated in order
-  // ({"kernels/reference/common.cl", "kernels/reference/path.cl"}). Throws GpuError with the
+  // ({"kernels/common/rng.cl", "kernels/reference/path.cl"}). Throws GpuError with the
   // compiler's build log when the build fails.
   cl::Program& program(const std::vector<std::string>& paths, const std::string& options = "");
 

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "gpu/error.hpp"
+#include "core/errors.hpp"
 
 namespace scatter::gpu {
 

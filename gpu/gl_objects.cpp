@@ -3,8 +3,8 @@
 #include <cstdio>
 #include <vector>
 
+#include "core/errors.hpp"
 #include "gpu/embedded_sources.hpp"
-#include "gpu/error.hpp"
 
 namespace scatter::gpu {
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "gpu/cl_context.hpp"
-#include "gpu/error.hpp"
+#include "core/errors.hpp"
 #include "gpu/gl_context.hpp"
 
 namespace scatter::gpu {

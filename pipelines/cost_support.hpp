@@ -28,14 +28,15 @@ GridShape grid_shape(const Scene& scene, int margin, int block = 1);
 constexpr double kGridBytes = 29;
 constexpr double kVoxelizeTransient = 1;
 
-// Seconds to voxelize and to upload_medium() (pipelines/cl_scene.cpp: sigma_t on the host, the
-// brick majorants in OpenCL) a grid of `voxels` voxels; measured on sphere and bunny (64-256).
+// Seconds to voxelize and to upload_medium() (pipelines/common/cl_scene.cpp: sigma_t on the host,
+// the brick majorants in OpenCL) a grid of `voxels` voxels; measured on sphere and bunny (64-256).
 double voxelize_seconds(const Scene& scene, double voxels);
 double upload_seconds(double voxels);
 
-// The peak of voxelize() then upload_medium() (pipelines/cl_scene.cpp), as reference and psf run
-// them: the VoxelGrid, sigma_t on the host, the sigma_s and sigma_t buffers and
-// brick_majorants' (gpu/grid_ops.cpp) transient copies of sigma_s and sigma_a; and its time.
+// The peak of voxelize() then upload_medium() (pipelines/common/cl_scene.cpp), as reference and
+// psf run them: the VoxelGrid, sigma_t on the host, the sigma_s and sigma_t buffers and
+// brick_majorants' (pipelines/common/grid_ops.cpp) transient copies of sigma_s and sigma_a; and
+// its time.
 void add_medium_upload(Ledger& l, const Scene& scene, const GridShape& g);
 
 // Share of the image the object covers at most (at least 1 %): a sphere shape's disc, else its

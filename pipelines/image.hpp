@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "scene/vec.hpp"
+#include "core/vec.hpp"
 
 namespace scatter {
 

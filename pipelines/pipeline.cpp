@@ -7,8 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/errors.hpp"
 #include "pipelines/registry.hpp"
-#include "protocol/json_reader.hpp"
 
 namespace scatter {
 

@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bake/bake_result.hpp"
 #include "gpu/gpu.hpp"
 #include "pipelines/image.hpp"
 #include "scene/scene.hpp"
@@ -42,11 +43,6 @@ struct Plan {
 
 // The stage called `name`; throws std::logic_error when the plan has none (a pipeline's bug).
 StagePlan& plan_stage(Plan& plan, const std::string& name);
-
-struct StageTime {
-  std::string stage;
-  double ms = 0;
-};
 
 // Numeric knobs a pipeline understands ("spp", "step", ...); each pipeline documents its own and
 // rejects the ones it does not know, so a typo is an error rather than a silent default.
@@ -80,18 +76,6 @@ class SettingsReader {
   std::string pipeline_;
   std::set<std::string> used_;
 };
-
-struct BakeResult {
-  bool needed = false;             // false: this pipeline bakes nothing
-  bool cache_hit = false;          // the product came from the cache (memory or disk)
-  std::string key;                 // content address of the product
-  std::vector<StageTime> timings;  // this call's stages (a hit: the lookup only)
-  std::vector<StageTime> bake_timings;  // the stages of the bake that made the product
-  nlohmann::json stats;            // pipeline-specific facts about the product
-};
-
-// Reports progress of a bake: stage name and the fraction of that stage done.
-using BakeProgress = std::function<void(const std::string& stage, double fraction)>;
 
 class BakeCache;
 

@@ -1,31 +1,21 @@
-// Reads untrusted JSON objects field by field. Every problem becomes a ValidationError that names
-// the field by its full path ("scene.medium.sigma_s[1]") and says what is wrong with it; fields
-// that nobody read are rejected by finish(), so a misspelt key is an error, not a silent default.
+// Reads untrusted JSON objects field by field. Every problem becomes a ValidationError
+// (core/errors.hpp) that names the field by its full path ("scene.medium.sigma_s[1]") and says
+// what is wrong with it; fields that nobody read are rejected by finish(), so a misspelt key is an
+// error, not a silent default.
 #pragma once
 
 #include <optional>
 #include <set>
-#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
-#include "scene/vec.hpp"
+#include "core/errors.hpp"
+#include "core/vec.hpp"
 
 namespace scatter {
-
-class ValidationError : public std::runtime_error {
- public:
-  ValidationError(std::string field, const std::string& problem)
-      : std::runtime_error(field.empty() ? problem : field + ": " + problem),
-        field_(std::move(field)) {}
-  const std::string& field() const { return field_; }
-
- private:
-  std::string field_;
-};
 
 struct Range {
   double lo;

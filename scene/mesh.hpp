@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "scene/vec.hpp"
+#include "core/vec.hpp"
 
 namespace scatter {
 

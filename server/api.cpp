@@ -9,8 +9,8 @@
 #include <optional>
 
 #include "bake/cache.hpp"
+#include "core/errors.hpp"
 #include "gpu/embedded_sources.hpp"
-#include "gpu/error.hpp"
 #include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
 #include "scene/scene.hpp"

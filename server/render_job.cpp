@@ -3,8 +3,7 @@
 #include <algorithm>
 #include <chrono>
 
-#include "gpu/error.hpp"
-#include "protocol/json_reader.hpp"
+#include "core/errors.hpp"
 
 namespace scatter::server {
 namespace {

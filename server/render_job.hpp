@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "protocol/json_reader.hpp"
+#include "core/errors.hpp"
 #include "server/metrics.hpp"
 #include "server/render_queue.hpp"
 

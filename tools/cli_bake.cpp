@@ -1,8 +1,8 @@
 // scatterd bake SCENE.json --pipeline single [--directions N --samples N --sh-order L] [--json]
 #include <iostream>
 
+#include "core/errors.hpp"
 #include "pipelines/registry.hpp"
-#include "protocol/json_reader.hpp"
 #include "tools/cache_option.hpp"
 #include "tools/commands.hpp"
 #include "tools/settings_option.hpp"

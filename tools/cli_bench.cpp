@@ -17,9 +17,9 @@
 #include <map>
 #include <sstream>
 
+#include "core/errors.hpp"
 #include "pipelines/metrics.hpp"
 #include "pipelines/pipeline.hpp"
-#include "protocol/json_reader.hpp"
 #include "tools/commands.hpp"
 #include "tools/settings_option.hpp"
 

@@ -3,8 +3,8 @@
 #include <filesystem>
 #include <iostream>
 
+#include "core/errors.hpp"
 #include "pipelines/pipeline.hpp"
-#include "protocol/json_reader.hpp"
 #include "tools/cache_option.hpp"
 #include "tools/commands.hpp"
 #include "tools/settings_option.hpp"

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <iostream>
 
+#include "core/errors.hpp"
 #include "gpu/gpu.hpp"
 #include "pipelines/lbl/slab.hpp"
 #include "pipelines/reference/slab.hpp"
-#include "protocol/json_reader.hpp"
 #include "tools/commands.hpp"
 
 namespace scatter::tools {

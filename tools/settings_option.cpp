@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "protocol/json_reader.hpp"
+#include "core/errors.hpp"
 
 namespace scatter::tools {
 

@@ -1,4 +1,4 @@
-// Shared by the lbl kernels (after kernels/reference/common.cl: Grid, Dda, lights, camera).
+// Shared by the lbl kernels (after kernels/common/: Grid, Dda, lights, camera).
 // The material volume: per voxel sigma_s and sigma_t (RGB), the refractive index n (smoothed)
 // and its gradient (per scene unit, 3 floats), all on the same grid as the deposit, the lattice
 // and the irradiance volume.

@@ -1,5 +1,5 @@
 // The `psf` pipeline's light volume (Algorithm 1's ComputeLightAttenuationVolume), after
-// kernels/reference/common.cl: per voxel centre, the light's unscattered radiance there and what
+// kernels/common/: per voxel centre, the light's unscattered radiance there and what
 // the path towards the light holds, all through the voxels exactly (DDA):
 //   l0[i]   = (E * exp(-tau), 0)      E: the light's irradiance (1/r^2, spot cone); RGB
 //   path[i] = (l2 (RGB), s2)          l2 = int b ds (scattering events), s2 = length inside the medium

@@ -1,5 +1,5 @@
 // The `single` pipeline's bake (papers/single-scattering-inhomogeneous.md, section 4), after
-// kernels/reference/common.cl (Grid, DDA).
+// kernels/common/ (Grid, DDA).
 //
 // sweep_slice: the direction-dependent optical depth of every voxel for a group of directions
 // that share their major axis, one slice of voxels per launch. For a voxel x and direction w,

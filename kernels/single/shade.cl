@@ -1,5 +1,5 @@
 // The `single` pipeline's per-sample factor with exact transmittance (setting exact_tr 1), after
-// kernels/reference/common.cl: optical depths are summed through the voxels (DDA) instead of read
+// kernels/common/: optical depths are summed through the voxels (DDA) instead of read
 // from the samples' spherical harmonics. The factor is the same as shaders/single/shade.comp's:
 //   weight * sigma_s * T(to eye) * sum over lights of E * T(to light) * HG
 // T(to light) depends only on the light's position (or direction), so light_transmittance runs

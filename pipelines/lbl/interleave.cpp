@@ -1,5 +1,7 @@
 #include "pipelines/lbl/interleave.hpp"
 
+#include "pipelines/common/cl_library.hpp"
+
 namespace scatter::lbl {
 
 InterleaveResult march_interleaved(gpu::ClContext& cl, const ClVolume& v, const cl::Buffer& rays,
@@ -9,7 +11,8 @@ InterleaveResult march_interleaved(gpu::ClContext& cl, const ClVolume& v, const 
   InterleaveResult r;
   if (count == 0) return r;
   auto& queue = cl.queue();
-  cl::Program& program = cl.program({"kernels/reference/common.cl", "kernels/lbl/common.cl", "kernels/lbl/march.cl"});
+  cl::Program& program =
+      cl.program(with_cl_library({"kernels/lbl/common.cl", "kernels/lbl/march.cl"}));
   cl::Buffer state(cl.context(), CL_MEM_READ_WRITE, size_t(count) * 16 * sizeof(float));
   cl::Buffer alive(cl.context(), CL_MEM_READ_WRITE, sizeof(cl_int));
   cl::Kernel start(program, "march_start"), round(program, "march_round");

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
 
 namespace scatter::lbl {
 namespace {

@@ -3,12 +3,13 @@
 #include <cmath>
 
 #include "bake/cache.hpp"
+#include "core/errors.hpp"
 #include "pipelines/asset_key.hpp"
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_library.hpp"
+#include "pipelines/common/cl_scene.hpp"
+#include "pipelines/common/stage_clock.hpp"
 #include "pipelines/lbl/interleave.hpp"
 #include "pipelines/lbl/light_rays.hpp"
-#include "pipelines/stage_clock.hpp"
-#include "protocol/json_reader.hpp"
 
 namespace scatter {
 namespace {
@@ -283,7 +284,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   const size_t floats = size_t(w) * h * 3;
   cl::Buffer camera = upload(cl, pack_camera(scene.camera, w, h));
   cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, floats * sizeof(float));
-  cl::Kernel k(cl.program({"kernels/reference/common.cl", "kernels/lbl/common.cl", "kernels/lbl/view.cl"}),
+  cl::Kernel k(cl.program(with_cl_library({"kernels/lbl/common.cl", "kernels/lbl/view.cl"})),
                "view_pass");
   const float w_single = d.single ? 1.f : 0.f, w_multiple = d.multiple && !d.tiny ? 1.f : 0.f;
   const lbl::ClVolume& v = st.device;

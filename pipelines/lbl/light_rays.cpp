@@ -4,15 +4,16 @@
 #include <cmath>
 #include <numbers>
 
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_library.hpp"
+#include "pipelines/common/cl_scene.hpp"
 
 namespace scatter::lbl {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-const std::vector<std::string> kProgram = {"kernels/reference/common.cl", "kernels/lbl/common.cl",
-                                           "kernels/lbl/march.cl"};
+const std::vector<std::string> kProgram =
+    with_cl_library({"kernels/lbl/common.cl", "kernels/lbl/march.cl"});
 
 void basis(const Vec3& w, Vec3& u, Vec3& v) {
   Vec3 h = std::abs(w.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/errors.hpp"
 #include "pipelines/lbl/lattice.hpp"
-#include "protocol/json_reader.hpp"
 
 namespace scatter::lbl {
 namespace {

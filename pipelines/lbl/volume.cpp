@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
 
 namespace scatter::lbl {
 namespace {

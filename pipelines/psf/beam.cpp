@@ -5,8 +5,8 @@
 #include <random>
 #include <thread>
 
+#include "core/errors.hpp"
 #include "pipelines/psf/psf_model.hpp"
-#include "protocol/json_reader.hpp"
 
 namespace scatter::psf {
 namespace {

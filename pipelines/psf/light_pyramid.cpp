@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 
+#include "pipelines/common/cl_library.hpp"
 #include "pipelines/psf/psf_model.hpp"
 
 namespace scatter::psf {
@@ -21,8 +22,8 @@ cl::NDRange range(int nx, int ny, int nz) { return cl::NDRange(size_t(nx), size_
 }  // namespace
 
 cl::Program& program(gpu::ClContext& cl) {
-  return cl.program({"kernels/reference/common.cl", "kernels/psf/light.cl", "kernels/psf/pyramid.cl",
-                     "kernels/psf/march.cl"});
+  return cl.program(
+      with_cl_library({"kernels/psf/light.cl", "kernels/psf/pyramid.cl", "kernels/psf/march.cl"}));
 }
 
 std::vector<cl_int4> pyramid_layout(int nx, int ny, int nz) {

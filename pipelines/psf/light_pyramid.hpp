@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "gpu/cl_context.hpp"
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
 
 namespace scatter::psf {
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "pipelines/asset_key.hpp"
-#include "pipelines/stage_clock.hpp"
+#include "pipelines/common/stage_clock.hpp"
 #include "scene/voxelizer.hpp"
 
 namespace scatter {

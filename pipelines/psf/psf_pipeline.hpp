@@ -17,7 +17,7 @@
 #include <map>
 #include <memory>
 
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
 #include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 #include "pipelines/psf/light_pyramid.hpp"

@@ -2,16 +2,16 @@
 
 #include <cmath>
 
-#include "pipelines/cl_scene.hpp"
-#include "pipelines/stage_clock.hpp"
-#include "protocol/json_reader.hpp"
+#include "core/errors.hpp"
+#include "pipelines/common/cl_library.hpp"
+#include "pipelines/common/cl_scene.hpp"
+#include "pipelines/common/stage_clock.hpp"
 #include "scene/bvh.hpp"
 
 namespace scatter {
 namespace {
 
-const std::vector<std::string> kProgram = {"kernels/reference/common.cl",
-                                           "kernels/reference/boundary.cl"};
+const std::vector<std::string> kProgram = with_cl_library({"kernels/reference/boundary.cl"});
 
 std::vector<std::string> program(const char* file) {
   auto p = kProgram;

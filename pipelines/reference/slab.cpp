@@ -2,7 +2,8 @@
 
 #include <cmath>
 
-#include "protocol/json_reader.hpp"
+#include "core/errors.hpp"
+#include "pipelines/common/cl_library.hpp"
 
 namespace scatter {
 namespace {
@@ -43,7 +44,7 @@ SlabResult run_reference_slab(gpu::ClContext& cl, const SlabParams& p) {
   const int per_item = static_cast<int>((p.photons + items - 1) / items);
   const double total = double(per_item) * items;
   cl::Buffer tallies(cl.context(), CL_MEM_WRITE_ONLY, sizeof(float) * kTallies * items);
-  cl::Kernel k(cl.program({"kernels/reference/common.cl", "kernels/reference/slab.cl"}), "slab_trace");
+  cl::Kernel k(cl.program(with_cl_library({"kernels/reference/slab.cl"})), "slab_trace");
   float tau = std::isinf(p.tau) ? INFINITY : float(p.tau);
   gpu::set_args(k, tau, float(p.albedo), float(p.g), float(p.mu0), float(p.ior), per_item, p.seed,
                 tallies);

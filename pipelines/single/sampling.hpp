@@ -11,7 +11,7 @@
 #include <functional>
 #include <vector>
 
-#include "scene/vec.hpp"
+#include "core/vec.hpp"
 
 namespace scatter {
 

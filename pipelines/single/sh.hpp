@@ -5,7 +5,7 @@
 #include <array>
 #include <vector>
 
-#include "scene/vec.hpp"
+#include "core/vec.hpp"
 
 namespace scatter {
 

@@ -8,17 +8,18 @@
 #include <mutex>
 #include <thread>
 
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_library.hpp"
+#include "pipelines/common/cl_scene.hpp"
+#include "pipelines/common/stage_clock.hpp"
 #include "pipelines/single/bake_support.hpp"
 #include "pipelines/single/sampling.hpp"
 #include "pipelines/single/sh.hpp"
-#include "pipelines/stage_clock.hpp"
 
 namespace scatter {
 using namespace single_detail;
 namespace {
 
-const std::vector<std::string> kProgram = {"kernels/reference/common.cl", "kernels/single/bake.cl"};
+const std::vector<std::string> kProgram = with_cl_library({"kernels/single/bake.cl"});
 constexpr float kDepthClamp = 20;   // exp(-20) ~ 2e-9: deeper is dark either way
 constexpr int kMaxShell = kSingleGridMargin - 1;
 

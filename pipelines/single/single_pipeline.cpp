@@ -7,11 +7,11 @@
 #include <string_view>
 
 #include "bake/cache.hpp"
+#include "core/errors.hpp"
 #include "pipelines/asset_key.hpp"
-#include "pipelines/cl_scene.hpp"
-#include "pipelines/stage_clock.hpp"
-#include "pipelines/surface/raster.hpp"
-#include "protocol/json_reader.hpp"
+#include "pipelines/common/cl_scene.hpp"
+#include "pipelines/common/raster.hpp"
+#include "pipelines/common/stage_clock.hpp"
 
 namespace scatter {
 
@@ -211,7 +211,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   StageClock clock(result.timings);
   gpu_.gl().make_current();
   if (!distance_program_) {
-    distance_program_ = gpu::build_program("shaders/thickness/distance.vert", "shaders/thickness/distance.frag");
+    distance_program_ = build_distance_program();
     shade_program_ = gpu::build_compute_program("shaders/single/shade.comp");
     splat_program_ = gpu::build_program("shaders/single/splat.vert", "shaders/single/splat.frag");
     empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);

@@ -3,7 +3,8 @@
 // each light's transmittance (and gradient) is kept while the light stays put.
 #include <map>
 
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_library.hpp"
+#include "pipelines/common/cl_scene.hpp"
 #include "pipelines/single/single_pipeline.hpp"
 
 namespace scatter {
@@ -27,7 +28,7 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
     cl_axes_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     current_.cl_uploaded = true;
   }
-  const std::vector<std::string> program = {"kernels/reference/common.cl", "kernels/single/shade.cl"};
+  const std::vector<std::string> program = with_cl_library({"kernels/single/shade.cl"});
   cl::Buffer lights = scatter::upload(cl, pack_lights(scene.lights));
   cl_float3 origin{{float(g.origin.x), float(g.origin.y), float(g.origin.z)}};
   const size_t block = size_t(std::max(b.count, 1)) * 3 * sizeof(float);

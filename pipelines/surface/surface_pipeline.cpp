@@ -2,8 +2,8 @@
 
 #include <memory>
 
-#include "pipelines/stage_clock.hpp"
-#include "pipelines/surface/raster.hpp"
+#include "pipelines/common/raster.hpp"
+#include "pipelines/common/stage_clock.hpp"
 
 namespace scatter {
 
@@ -39,7 +39,7 @@ RenderResult SurfacePipeline::render(const Scene& scene, const RenderRequest& re
   glProgramUniform1i(prog, glGetUniformLocation(prog, "shadowed"), s.shadows ? 1 : 0);
   if (s.shadows) {
     if (!distance_program_)
-      distance_program_ = gpu::build_program("shaders/thickness/distance.vert", "shaders/thickness/distance.frag");
+      distance_program_ = build_distance_program();
     Aabb b = scene.mesh->bounds();
     // A texel's footprint at the far side of the object, so a lit surface does not shadow itself.
     float bias = static_cast<float>(2.5 * length(b.size()) / s.shadow_size);

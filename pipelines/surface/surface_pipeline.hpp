@@ -1,5 +1,6 @@
 // `surface`: the mesh alone, rasterised with energy-normalised Blinn-Phong under the scene's
-// lights through EGL. The smallest end-to-end path; its raster pieces serve later pipelines.
+// lights through EGL. The smallest end-to-end path; the raster pieces it draws with
+// (pipelines/common/raster) serve the other pipelines too.
 // Settings: shadows (0; 1: a distance map per light, as the thickness path's, and a facet is lit
 // only where no surface lies nearer to the light), shadow_size (1024).
 #pragma once

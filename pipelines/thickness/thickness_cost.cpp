@@ -1,5 +1,5 @@
 // ThicknessPipeline::estimate and SurfacePipeline::estimate: the distance maps and render
-// targets they draw (pipelines/surface/raster.cpp's RenderTarget: RGBA32F colour + 32F depth).
+// targets they draw (pipelines/common/raster.cpp's RenderTarget: RGBA32F colour + 32F depth).
 #include <algorithm>
 
 #include "pipelines/cost_support.hpp"

@@ -3,9 +3,9 @@
 #include <memory>
 #include <numbers>
 
-#include "pipelines/stage_clock.hpp"
-#include "pipelines/surface/raster.hpp"
-#include "protocol/json_reader.hpp"
+#include "core/errors.hpp"
+#include "pipelines/common/raster.hpp"
+#include "pipelines/common/stage_clock.hpp"
 
 namespace scatter {
 
@@ -35,7 +35,7 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   ThicknessSettings s = ThicknessSettings::read(request.settings);
   gpu_.gl().make_current();
   if (!distance_program_) {
-    distance_program_ = gpu::build_program("shaders/thickness/distance.vert", "shaders/thickness/distance.frag");
+    distance_program_ = build_distance_program();
     integrate_program_ = gpu::build_program("shaders/thickness/integrate.vert", "shaders/thickness/integrate.frag");
     empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
   }

@@ -82,7 +82,7 @@ vec3 transmittance(uint i, float y[MAX_COEFFS]) {
   return depth_mode != 0 ? exp(-max(s, vec3(0.0))) : clamp(s, vec3(0.0), vec3(1.0));
 }
 
-// As kernels/reference/common.cl: a hard edge when the cone has no soft band.
+// As kernels/common/lights.cl: a hard edge when the cone has no soft band.
 float smooth_step(float e0, float e1, float x) {
   if (e1 <= e0) return x >= e0 ? 1.0 : 0.0;
   float t = clamp((x - e0) / (e1 - e0), 0.0, 1.0);

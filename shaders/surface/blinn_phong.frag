@@ -1,6 +1,6 @@
 #version 450 core
 // Energy-normalised Blinn-Phong under point, directional and spot lights; with `shadowed` set,
-// a light counts only where its distance map (shaders/thickness/distance.frag, seen from the
+// a light counts only where its distance map (shaders/common/distance.frag, seen from the
 // light) holds no surface nearer to it than this one, less a bias.
 // Radiance = sum over lights of (kd / pi + ks (n + 8) / (8 pi) cos^n(theta_h)) E cos(theta_i),
 // with E = intensity / r^2 for point and spot lights and E = irradiance for directional ones.

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "../test_util.hpp"
-#include "gpu/error.hpp"
+#include "core/errors.hpp"
 
 namespace scatter::gpu {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "../test_util.hpp"
 #include "axis_box.hpp"
-#include "gpu/error.hpp"
+#include "core/errors.hpp"
 #include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
 

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "../../test_util.hpp"
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
 #include "pipelines/lbl/light_rays.hpp"
 
 namespace scatter::lbl {

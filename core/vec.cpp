@@ -1,4 +1,4 @@
-#include "scene/vec.hpp"
+#include "core/vec.hpp"
 
 namespace scatter {
 

@@ -1,4 +1,4 @@
-#include "pipelines/cl_scene.hpp"
+#include "pipelines/common/cl_scene.hpp"
 
 #include <numbers>
 
@@ -44,7 +44,7 @@ ClMedium upload_medium(gpu::ClContext& cl, const VoxelGrid& grid, int brick) {
   for (size_t i = 0; i < sigma_t.size(); ++i) sigma_t[i] = grid.sigma_s[i] + grid.sigma_a[i];
   m.sigma_s = upload(cl, grid.sigma_s);
   m.sigma_t = upload(cl, sigma_t);
-  m.bricks = gpu::brick_majorants(cl, grid, brick);
+  m.bricks = brick_majorants(cl, grid, brick);
   m.majorant = upload(cl, m.bricks.majorant);
   m.origin = {{float(grid.origin.x), float(grid.origin.y), float(grid.origin.z)}};
   m.voxel = float(grid.voxel);

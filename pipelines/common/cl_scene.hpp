@@ -1,11 +1,12 @@
-// A scene's pieces in the layout the OpenCL kernels read (kernels/reference/common.cl): lights
-// (16 floats each), the camera (12 floats), and the voxel medium with per-brick majorants.
+// A scene's pieces in the layout the OpenCL kernels read (kernels/common/: lights.cl, camera.cl,
+// dda.cl): lights (16 floats each), the camera (12 floats), and the voxel medium with per-brick
+// majorants.
 #pragma once
 
 #include <vector>
 
 #include "gpu/cl_context.hpp"
-#include "gpu/grid_ops.hpp"
+#include "pipelines/common/grid_ops.hpp"
 #include "scene/scene.hpp"
 #include "scene/voxelizer.hpp"
 
@@ -17,7 +18,7 @@ std::vector<float> pack_camera(const Camera& camera, int width, int height);
 
 struct ClMedium {
   cl::Buffer sigma_s, sigma_t, majorant;  // RGB interleaved per voxel; one majorant per brick
-  gpu::BrickGrid bricks;
+  BrickGrid bricks;
   cl_float3 origin{};
   float voxel = 0;
   int nx = 0, ny = 0, nz = 0;

@@ -1,4 +1,5 @@
-// Small fixed-size vector maths shared by the scene model, the voxelizer and the pipelines.
+// Small fixed-size vector maths shared by the JSON reader, the scene model, the voxelizer and the
+// pipelines.
 #pragma once
 
 #include <algorithm>

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "pipelines/pipeline.hpp"
+#include "bake/bake_result.hpp"
 
 namespace scatter {
 

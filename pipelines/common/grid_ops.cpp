@@ -1,8 +1,8 @@
-#include "gpu/grid_ops.hpp"
+#include "pipelines/common/grid_ops.hpp"
 
-namespace scatter::gpu {
+namespace scatter {
 
-BrickGrid brick_majorants(ClContext& cl, const VoxelGrid& grid, int brick) {
+BrickGrid brick_majorants(gpu::ClContext& cl, const VoxelGrid& grid, int brick) {
   BrickGrid out;
   out.brick = brick;
   out.bx = (grid.nx + brick - 1) / brick;
@@ -18,10 +18,10 @@ BrickGrid brick_majorants(ClContext& cl, const VoxelGrid& grid, int brick) {
                 const_cast<float*>(grid.sigma_a.data()));
   cl::Buffer maj(ctx, CL_MEM_WRITE_ONLY, bricks * sizeof(float));
   cl::Kernel kernel(cl.program({"kernels/common/grid.cl"}), "brick_majorant");
-  set_args(kernel, ss, sa, grid.nx, grid.ny, grid.nz, brick, out.bx, out.by, out.bz, maj);
+  gpu::set_args(kernel, ss, sa, grid.nx, grid.ny, grid.nz, brick, out.bx, out.by, out.bz, maj);
   cl.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(bricks));
   cl.queue().enqueueReadBuffer(maj, CL_TRUE, 0, bricks * sizeof(float), out.majorant.data());
   return out;
 }
 
-}  // namespace scatter::gpu
+}  // namespace scatter

@@ -1,4 +1,4 @@
-// Voxel-grid operations that run in OpenCL (kernels/common/grid.cl).
+// Voxel-grid operations that run in OpenCL (kernels/common/grid.cl), on the voxelizer's grid.
 #pragma once
 
 #include <vector>
@@ -6,7 +6,7 @@
 #include "gpu/cl_context.hpp"
 #include "scene/voxelizer.hpp"
 
-namespace scatter::gpu {
+namespace scatter {
 
 struct BrickGrid {
   int brick = 8;           // voxels per brick side
@@ -15,6 +15,6 @@ struct BrickGrid {
 };
 
 // Per-brick extinction majorants for delta tracking; empty bricks get 0 and can be skipped.
-BrickGrid brick_majorants(ClContext& cl, const VoxelGrid& grid, int brick = 8);
+BrickGrid brick_majorants(gpu::ClContext& cl, const VoxelGrid& grid, int brick = 8);
 
-}  // namespace scatter::gpu
+}  // namespace scatter

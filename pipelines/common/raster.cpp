@@ -1,10 +1,9 @@
-#include "pipelines/surface/raster.hpp"
+#include "pipelines/common/raster.hpp"
 
 #include <cmath>
 #include <numbers>
 
-#include "gpu/error.hpp"
-#include "protocol/json_reader.hpp"
+#include "core/errors.hpp"
 
 namespace scatter {
 
@@ -119,6 +118,10 @@ void uniform1i(GLuint p, const std::string& name, int v) {
 }
 void uniform_matrix(GLuint p, const std::string& name, const Mat4& m) {
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, name.c_str()), 1, GL_FALSE, m.m.data());
+}
+
+gpu::GlObject build_distance_program() {
+  return gpu::build_program("shaders/common/distance.vert", "shaders/common/distance.frag");
 }
 
 void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target, const Mat4& view,

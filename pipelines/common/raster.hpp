@@ -63,7 +63,10 @@ void set_light_uniforms(GLuint program, const std::vector<Light>& lights);
 // ray from gl_FragCoord.
 void set_camera_uniforms(GLuint program, const Scene& scene);
 
-// Draws the mesh into `target` with shaders/thickness/distance.*, writing the distance from
+// The program draw_distance() draws with: shaders/common/distance.*.
+gpu::GlObject build_distance_program();
+
+// Draws the mesh into `target` with build_distance_program()'s program, writing the distance from
 // `origin` (along rays, or along `direction` when `along_direction`); with `first_layer` (a
 // previous layer's texture) only surfaces behind it are kept: depth peeling. Texels no surface
 // covers hold `empty`.

@@ -1,0 +1,110 @@
+// The voxel medium (piecewise constant: each voxel holds its own sigma_s and sigma_a),
+// Amanatides-Woo traversal of a regular grid of cells, exact optical depth. Part of the kernels'
+// shared library (pipelines/common/cl_library.hpp).
+
+// ---- The voxel medium -----------------------------------------------------------------------
+
+typedef struct {
+  float3 origin;  // corner of voxel (0, 0, 0)
+  float voxel;    // edge length
+  int nx, ny, nz;
+  int brick, bx, by, bz;
+} Grid;
+
+Grid make_grid(float3 origin, float voxel, int nx, int ny, int nz, int brick, int bx, int by, int bz) {
+  Grid g;
+  g.origin = origin;
+  g.voxel = voxel;
+  g.nx = nx;
+  g.ny = ny;
+  g.nz = nz;
+  g.brick = brick;
+  g.bx = bx;
+  g.by = by;
+  g.bz = bz;
+  return g;
+}
+
+int voxel_index(const Grid* g, int i, int j, int k) { return (k * g->ny + j) * g->nx + i; }
+
+// sigma of `channel` at voxel (i, j, k); zero outside the grid.
+float voxel_sigma(const Grid* g, __global const float* sigma, int3 c, int channel) {
+  if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= g->nx || c.y >= g->ny || c.z >= g->nz) return 0.0f;
+  return sigma[3 * voxel_index(g, c.x, c.y, c.z) + channel];
+}
+
+int3 voxel_of(const Grid* g, float3 p) {
+  float3 q = (p - g->origin) / g->voxel;
+  return (int3)((int)floor(q.x), (int)floor(q.y), (int)floor(q.z));
+}
+
+// Parametric interval [t0, t1] of the ray inside the grid's box; false if it misses.
+bool grid_interval(const Grid* g, float3 o, float3 d, float* t0, float* t1) {
+  float3 lo = g->origin;
+  float3 hi = g->origin + g->voxel * (float3)(g->nx, g->ny, g->nz);
+  float3 inv = 1.0f / d;  // IEEE: +-inf for zero components
+  float3 a = (lo - o) * inv, b = (hi - o) * inv;
+  float3 mn = fmin(a, b), mx = fmax(a, b);
+  // A zero direction component gives nan when the origin lies on a face; fmax/fmin drop nans.
+  float n = fmax(fmax(mn.x, mn.y), fmax(mn.z, 0.0f));
+  float f = fmin(fmin(mx.x, mx.y), mx.z);
+  *t0 = n;
+  *t1 = f;
+  return f > n;
+}
+
+// ---- Amanatides-Woo traversal of a regular grid of cells -------------------------------------
+
+typedef struct {
+  int3 cell, step, dims;
+  float3 tmax, tdelta;
+  float t, tend;
+} Dda;
+
+void dda_init(Dda* s, float3 o, float3 d, float3 origin, float cell, int3 dims, float t0, float t1) {
+  float3 p = o + d * t0;
+  float3 q = (p - origin) / cell;
+  s->cell = clamp((int3)((int)floor(q.x), (int)floor(q.y), (int)floor(q.z)), (int3)(0), dims - 1);
+  s->dims = dims;
+  s->step = (int3)(d.x >= 0 ? 1 : -1, d.y >= 0 ? 1 : -1, d.z >= 0 ? 1 : -1);
+  float3 next = origin + cell * (convert_float3(s->cell) + (float3)(d.x >= 0, d.y >= 0, d.z >= 0));
+  float3 ad = fabs(d);
+  s->tdelta = (float3)(ad.x > 0 ? cell / ad.x : INFINITY, ad.y > 0 ? cell / ad.y : INFINITY,
+                       ad.z > 0 ? cell / ad.z : INFINITY);
+  s->tmax = (float3)(ad.x > 0 ? (next.x - o.x) / d.x : INFINITY,
+                     ad.y > 0 ? (next.y - o.y) / d.y : INFINITY,
+                     ad.z > 0 ? (next.z - o.z) / d.z : INFINITY);
+  s->t = t0;
+  s->tend = t1;
+}
+
+// The next cell segment [*a, *b] and its cell; false when the ray has left the grid or passed tend.
+bool dda_next(Dda* s, float* a, float* b, int3* cell) {
+  if (s->t >= s->tend) return false;
+  if (any(s->cell < 0) || any(s->cell >= s->dims)) return false;
+  *cell = s->cell;
+  *a = s->t;
+  float tn = fmin(fmin(s->tmax.x, s->tmax.y), s->tmax.z);
+  *b = fmin(tn, s->tend);
+  s->t = *b;
+  if (s->tmax.x <= tn) { s->cell.x += s->step.x; s->tmax.x += s->tdelta.x; }
+  else if (s->tmax.y <= tn) { s->cell.y += s->step.y; s->tmax.y += s->tdelta.y; }
+  else { s->cell.z += s->step.z; s->tmax.z += s->tdelta.z; }
+  return true;
+}
+
+// Exact optical depth of `channel` along o + t d, t in [t0, t1] (piecewise-constant voxels).
+float optical_depth(const Grid* g, __global const float* sigma_t, int channel, float3 o, float3 d,
+                    float t0, float t1) {
+  float g0, g1;
+  if (!grid_interval(g, o, d, &g0, &g1)) return 0.0f;
+  g0 = fmax(g0, t0);
+  g1 = fmin(g1, t1);
+  if (g1 <= g0) return 0.0f;
+  Dda s;
+  dda_init(&s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), g0, g1);
+  float tau = 0.0f, a, b;
+  int3 c;
+  while (dda_next(&s, &a, &b, &c)) tau += sigma_t[3 * voxel_index(g, c.x, c.y, c.z) + channel] * (b - a);
+  return tau;
+}
