@@ -8,6 +8,7 @@ const $ = (id) => document.getElementById(id);
 const state = {
   ws: null, frames: 0, header: null, sentAt: 0, fpsFrames: 0, fpsSince: performance.now(),
   orbit: { yaw: 0, pitch: 0.05, radius: 3.6 }, light: [2, 3, 3], revision: 0, lightRevision: 0,
+  baking: false,
 };
 
 function cameraMessage() {
@@ -31,22 +32,49 @@ function send(msg, timed = true) {
   }
 }
 
-// Settings per pipeline for each quality; "normal" is each pipeline's defaults.
-const QUALITY = {
-  single: { draft: { samples: 5000, directions: 64 }, normal: {}, high: { samples: 100000, directions: 256 } },
-  reference: { draft: { step: 0.5 }, normal: {}, high: { step: 0.125 } },
-  thickness: { draft: { steps: 12, shadow_size: 512 }, normal: {}, high: { steps: 96, shadow_size: 2048 } },
-  psf: { draft: { step: 2 }, normal: {}, high: { step: 0.5 } },
-  lbl: { draft: { rays: 1, tolerance: 0.003 }, normal: {}, high: { rays: 3, directions: 18, tolerance: 0.0003 } },
-};
-// The terms a live view asks of each pipeline: all it renders where it renders several orders.
-const TERMS = { surface: 'surface', psf: 'all', lbl: 'all' };
-const settingsFor = (pipeline) => (QUALITY[pipeline] || {})[$('quality').value] || {};
+// The pipeline menu starts on this one when the server offers it, else on the server's first.
+const PREFERRED_PIPELINE = 'surface';
+// The quality the menu starts on when the pipeline offers it (each pipeline's own defaults).
+const PREFERRED_QUALITY = 'normal';
+// The server's registry (GET /api/pipelines): name -> {summary, terms, default_terms, bakes,
+// qualities, ...}. Every pipeline, quality, terms and setting name the page shows comes from it.
+const registry = new Map();
+
+const selected = () => registry.get($('pipeline').value);
+function qualitySettings(pipeline) {
+  const q = pipeline.qualities.find((q) => q.name === $('quality').value);
+  return q ? q.settings : {};
+}
+
+// Replaces a select's options by items ({value, title?}) and selects `choice` (else the first).
+function fillSelect(select, items, choice) {
+  select.replaceChildren(...items.map(({ value, title }) => {
+    const option = document.createElement('option');
+    option.value = option.textContent = value;
+    if (title) option.title = title;
+    return option;
+  }));
+  select.value = items.some((i) => i.value === choice) ? choice : (items[0] ? items[0].value : '');
+}
+
+// The quality, terms and bake controls follow the selected pipeline. The quality chosen before
+// is kept where this pipeline has it too; the terms start at the pipeline's default.
+function pipelineChanged() {
+  const p = selected();
+  $('pipeline').title = p.summary;
+  const before = $('quality').value;
+  fillSelect($('quality'), p.qualities.map((q) => ({ value: q.name })),
+             p.qualities.some((q) => q.name === before) ? before : PREFERRED_QUALITY);
+  fillSelect($('terms'), p.terms.map((t) => ({ value: t })), p.default_terms);
+  $('bake-box').hidden = !p.bakes;
+  $('bake').disabled = !p.bakes || state.baking;
+}
 
 function hello() {
-  const pipeline = $('pipeline').value;
-  send({ type: 'hello', scene_name: $('scene').value, pipeline, format: 'jpg',
-         terms: TERMS[pipeline] || 'single', settings: settingsFor(pipeline) });
+  const p = selected();
+  if (!p) return;
+  send({ type: 'hello', scene_name: $('scene').value, pipeline: p.name, format: 'jpg',
+         terms: $('terms').value, settings: qualitySettings(p) });
 }
 
 // REST calls carry the page's token, if it was opened with ?token=.
@@ -63,11 +91,15 @@ function api(path, options = {}) {
 
 // Starts (or finds) the bake job for this scene and quality and follows it to the end.
 async function bake() {
+  const pipeline = selected();
+  if (!pipeline || !pipeline.bakes) return;
+  state.baking = true;
   $('bake').disabled = true;
   const bar = $('bake-progress'), label = $('bake-status');
+  label.title = '';
   try {
     let r = await api('/api/bakes', { method: 'POST', body: JSON.stringify(
-      { scene_name: $('scene').value, pipeline: 'single', settings: settingsFor('single') }) });
+      { scene_name: $('scene').value, pipeline: pipeline.name, settings: qualitySettings(pipeline) }) });
     if (r.status >= 400) throw new Error(r.body.error);
     const id = r.body.id;
     for (;;) {
@@ -75,9 +107,10 @@ async function bake() {
       bar.value = job.progress;
       label.textContent = job.state === 'running' ? `${job.stage} ${(100 * job.progress).toFixed(0)}%` : job.state;
       if (job.state === 'done') {
-        label.textContent = `done${job.cache_hit ? ' (cached)' : ''}` +
-                            (job.stats && job.stats.samples ? ` · ${job.stats.samples} samples` : '');
-        if ($('pipeline').value === 'single') hello();  // the view picks the baked samples up
+        label.textContent = `done${job.cache_hit ? ' (cached)' : ''} · ${pipeline.name}`;
+        // What the product holds, as the pipeline reports it, in the tooltip.
+        label.title = Object.entries(job.stats || {}).map(([k, v]) => `${k} ${v}`).join(' · ');
+        if ($('pipeline').value === pipeline.name) hello();  // the view picks the product up
         break;
       }
       if (job.state === 'failed' || job.state === 'cancelled') {
@@ -91,7 +124,8 @@ async function bake() {
   } catch (e) {
     label.textContent = 'error: ' + e.message;
   } finally {
-    $('bake').disabled = false;
+    state.baking = false;
+    $('bake').disabled = !(selected() || {}).bakes;
   }
 }
 
@@ -163,9 +197,39 @@ canvas.addEventListener('wheel', (e) => {
   send(cameraMessage());
 }, { passive: false });
 $('scene').addEventListener('change', hello);
-$('pipeline').addEventListener('change', hello);
+$('pipeline').addEventListener('change', () => { pipelineChanged(); hello(); });
 $('quality').addEventListener('change', hello);
+$('terms').addEventListener('change', hello);
 $('bake').addEventListener('click', bake);
 $('light-color').addEventListener('input', () => send(lightsMessage()));
 $('light-intensity').addEventListener('input', () => send(lightsMessage()));
-connect();
+
+// The menus come from the server's registry; until it answers there is nothing to ask for, so the
+// page says why and tries again (the daemon may be restarting, or the token may be wrong).
+async function start() {
+  let problem;
+  try {
+    const r = await api('/api/pipelines');
+    const list = r.body && Array.isArray(r.body.pipelines) ? r.body.pipelines : null;
+    if (r.status >= 400) problem = (r.body && r.body.error) || `${r.status}`;
+    else if (!list || list.length === 0) problem = 'the answer lists no pipelines';
+    else {
+      registry.clear();
+      for (const p of list) registry.set(p.name, p);
+      fillSelect($('pipeline'), list.map((p) => ({ value: p.name, title: p.summary })),
+                 registry.has(PREFERRED_PIPELINE) ? PREFERRED_PIPELINE : list[0].name);
+      pipelineChanged();
+      $('error').hidden = true;
+      connect();
+      return;
+    }
+  } catch (e) {
+    problem = e.message;
+  }
+  $('error').textContent = `could not load the pipelines from the server (GET /api/pipelines): ${problem}. ` +
+                           'Trying again every 3 s.';
+  $('error').hidden = false;
+  $('status').textContent = 'no pipelines';
+  setTimeout(start, 3000);
+}
+start();

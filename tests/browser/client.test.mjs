@@ -1,7 +1,10 @@
 // The web client in a real browser: Debian's chromium driven by playwright-core. Starts scatterd
-// on a free loopback port, loads the page, waits for a frame, drags to orbit and sees the view
-// change, bakes the single pipeline's samples and watches the progress bar reach 100 %, renders
-// with them, and saves a screenshot. Run by CTest: node --test client.test.mjs (SCATTERD, OUT_DIR set).
+// on a free loopback port, loads the page, checks that its menus are the server's registry
+// (GET /api/pipelines), waits for a frame, drags to orbit and sees the view change, bakes the
+// single pipeline's samples and watches the progress bar reach 100 %, renders with them, checks
+// the terms menu of a pipeline with several terms and what the hello sends, saves a screenshot,
+// and shows the page's error while /api/pipelines fails. Run by CTest: node --test
+// client.test.mjs (SCATTERD, OUT_DIR set).
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn } from 'node:child_process';
@@ -31,8 +34,23 @@ test('the page streams frames, orbits on drag and bakes', { timeout: 240000 }, a
            '--disable-component-update'],
   });
   try {
+    const registry = (await (await fetch(new URL('/api/pipelines', url))).json()).pipelines;
+    const info = (name) => registry.find((p) => p.name === name);
     const page = await browser.newPage({ viewport: { width: 900, height: 600 } });
+    const hellos = [];  // the hello messages the page sends, in order
+    page.on('websocket', (ws) => ws.on('framesent', ({ payload }) => {
+      try { const m = JSON.parse(payload); if (m.type === 'hello') hellos.push(m); } catch { /* binary */ }
+    }));
+    // The newest hello once there are more than k (the page sends it on the event it handles).
+    const helloAfter = async (k) => {
+      for (let t = 0; hellos.length <= k; t += 20) {
+        if (t > 10000) throw new Error(`no hello after the ${k}th`);
+        await new Promise((ok) => setTimeout(ok, 20));
+      }
+      return hellos.at(-1);
+    };
     await page.goto(url);
+    const options = (id) => page.$$eval(`#${id} option`, (os) => os.map((o) => ({ value: o.value, title: o.title })));
     const frames = () => page.$eval('#view', (c) => Number(c.dataset.frames || 0));
     const pixels = () => page.$eval('#view', (c) => {
       const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
@@ -42,6 +60,19 @@ test('the page streams frames, orbits on drag and bakes', { timeout: 240000 }, a
     });
     await page.waitForFunction(() => Number(document.getElementById('view').dataset.frames || 0) >= 1,
                                null, { timeout: 60000 });
+
+    // The menus are the registry's: every pipeline, in its order, with its summary; surface first
+    // selected, with its qualities and terms; it does not bake, so there is no bake button.
+    assert.deepEqual(await options('pipeline'), registry.map((p) => ({ value: p.name, title: p.summary })));
+    assert.equal(await page.inputValue('#pipeline'), 'surface');
+    assert.deepEqual((await options('quality')).map((o) => o.value), info('surface').qualities.map((q) => q.name));
+    assert.deepEqual((await options('terms')).map((o) => o.value), info('surface').terms);
+    assert.equal(info('surface').bakes, false);
+    assert.equal(await page.isVisible('#bake'), false, 'no bake button for a pipeline that does not bake');
+    assert.equal(await page.isDisabled('#bake'), true);
+    assert.deepEqual(await helloAfter(0), { type: 'hello', scene_name: 'bunny', pipeline: 'surface', format: 'jpg',
+                                  terms: info('surface').default_terms, settings: {} });
+
     const before = await pixels();
     assert.ok(before > 0, 'the first frame shows something');
     const n = await frames();
@@ -60,8 +91,22 @@ test('the page streams frames, orbits on drag and bakes', { timeout: 240000 }, a
     assert.notEqual(after, before, 'the view changed after the drag');
     assert.match(await page.textContent('#stages'), /surface: .*raster/);
 
-    // Bake the single pipeline's samples at draft quality: the bar climbs to 100 %.
+    // Draft quality on a pipeline that has it is kept when switching to single (so the view's
+    // own render bakes draft samples, not the default's many), whose settings the hello sends.
+    const draft = (name) => info(name).qualities.find((q) => q.name === 'draft').settings;
+    await page.selectOption('#pipeline', 'thickness');
+    let k = hellos.length;
     await page.selectOption('#quality', 'draft');
+    assert.deepEqual((await helloAfter(k)).settings, draft('thickness'));
+    assert.equal(info('single').bakes, true);
+    k = hellos.length;
+    await page.selectOption('#pipeline', 'single');
+    assert.equal(await page.inputValue('#quality'), 'draft');
+    assert.deepEqual(await helloAfter(k), { type: 'hello', scene_name: 'bunny', pipeline: 'single', format: 'jpg',
+                                      terms: info('single').default_terms, settings: draft('single') });
+
+    // Bake the single pipeline's samples at draft quality: the bar climbs to 100 %.
+    assert.equal(await page.isVisible('#bake'), true);
     const seen = [];
     await page.exposeFunction('recordProgress', (v) => seen.push(v));
     await page.evaluate(() => {
@@ -69,14 +114,14 @@ test('the page streams frames, orbits on drag and bakes', { timeout: 240000 }, a
       new MutationObserver(() => window.recordProgress(bar.value)).observe(bar, { attributes: true });
       setInterval(() => window.recordProgress(bar.value), 100);
     });
+    const sent = hellos.length, m = await frames();
     await page.click('#bake');
     await page.waitForFunction(() => document.getElementById('bake-status').textContent.startsWith('done'),
                                null, { timeout: 120000 });
     assert.equal(await page.$eval('#bake-progress', (b) => b.value), 1);
     assert.ok(seen.some((v) => v > 0 && v < 1), `the bar moved through intermediate values: ${seen}`);
-    // The baked pipeline now renders frames straight away.
-    const m = await frames();
-    await page.selectOption('#pipeline', 'single');
+    // The bake re-sent the hello (the same: the view picks the product up); single renders frames.
+    assert.deepEqual(await helloAfter(sent), hellos[sent - 1]);
     await page.waitForFunction((k) => Number(document.getElementById('view').dataset.frames) > k &&
                                       /single:/.test(document.getElementById('stages').textContent), m,
                                { timeout: 60000 });
@@ -84,6 +129,38 @@ test('the page streams frames, orbits on drag and bakes', { timeout: 240000 }, a
     const out = process.env.OUT_DIR || '.';
     mkdirSync(out, { recursive: true });
     await page.screenshot({ path: `${out}/browser-client.png` });
+
+    // A pipeline with several terms: its terms fill the menu, its default selected and sent; a
+    // choice from the menu is sent too. It does not bake: the bake button goes.
+    const several = registry.find((p) => p.terms.length > 1 && !p.bakes);
+    k = hellos.length;
+    await page.selectOption('#pipeline', several.name);
+    assert.deepEqual((await options('terms')).map((o) => o.value), several.terms);
+    assert.equal(await page.inputValue('#terms'), several.default_terms);
+    const h = await helloAfter(k);
+    assert.equal(h.pipeline, several.name);
+    assert.equal(h.terms, several.default_terms);
+    const other = several.terms.find((t) => t !== several.default_terms);
+    k = hellos.length;
+    await page.selectOption('#terms', other);
+    assert.equal((await helloAfter(k)).terms, other);
+    assert.equal(await page.isVisible('#bake'), false);
+    assert.equal(await page.isDisabled('#bake'), true);
+    await page.screenshot({ path: `${out}/browser-client-terms.png` });
+    await page.close();  // its session's render stops
+
+    // While /api/pipelines fails the page says so, and fills its menus once it answers.
+    const failing = await browser.newPage({ viewport: { width: 900, height: 600 } });
+    await failing.route('**/api/pipelines', (r) => r.fulfill(
+      { status: 503, contentType: 'application/json', body: JSON.stringify({ error: 'the server is stopping' }) }));
+    await failing.goto(url);
+    await failing.waitForSelector('#error', { state: 'visible', timeout: 10000 });
+    assert.match(await failing.textContent('#error'), /GET \/api\/pipelines.*the server is stopping/);
+    await failing.screenshot({ path: `${out}/browser-client-error.png` });
+    await failing.unroute('**/api/pipelines');
+    await failing.waitForSelector('#error', { state: 'hidden', timeout: 10000 });
+    assert.equal(await failing.inputValue('#pipeline'), 'surface');
+    await failing.close();
   } finally {
     await browser.close();
     proc.kill('SIGTERM');
