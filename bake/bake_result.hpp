@@ -3,10 +3,9 @@
 #pragma once
 
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace scatter {
 
@@ -17,12 +16,12 @@ struct StageTime {
 };
 
 struct BakeResult {
-  bool needed = false;             // false: this pipeline bakes nothing
-  bool cache_hit = false;          // the product came from the cache (memory or disk)
-  std::string key;                 // content address of the product
-  std::vector<StageTime> timings;  // this call's stages (a hit: the lookup only)
+  bool needed = false;                  // false: this pipeline bakes nothing
+  bool cache_hit = false;               // the product came from the cache (memory or disk)
+  std::string key;                      // content address of the product
+  std::vector<StageTime> timings;       // this call's stages (a hit: the lookup only)
   std::vector<StageTime> bake_timings;  // the stages of the bake that made the product
-  nlohmann::json stats;            // pipeline-specific facts about the product
+  nlohmann::json stats;                 // pipeline-specific facts about the product
 };
 
 // Reports progress of a bake: stage name and the fraction of that stage done.

@@ -87,7 +87,8 @@ FileRead read_bake_file(const fs::path& path, const std::string& key_hex) {
                                     " payload bytes, file has " +
                                     std::to_string(length - kHeaderSize)};
   if (const std::string_view key(header + kKeyAt, 32); key != key_bytes(key_hex))
-    return {FileRead::kCorrupt, "holds the product of key " + to_hex(to_digest(key)) + ", not of this one"};
+    return {FileRead::kCorrupt,
+            "holds the product of key " + to_hex(to_digest(key)) + ", not of this one"};
   std::string payload(size, '\0');
   if (!in.read(payload.data(), static_cast<std::streamsize>(size)))
     return {FileRead::kUnreadable, "cannot read the payload"};
@@ -189,11 +190,11 @@ std::optional<std::shared_ptr<const std::string>> BakeCache::get(const std::stri
   }
   if (read.outcome == FileRead::kCorrupt) {
     const std::string fate = quarantine(path, writes_seen);
-    spdlog::warn("event=bake_cache_corrupt file=\"{}\" problem=\"{}\" fate=\"{}\" outcome=miss", path.string(),
-                 read.payload_or_problem, fate);
+    spdlog::warn("event=bake_cache_corrupt file=\"{}\" problem=\"{}\" fate=\"{}\" outcome=miss",
+                 path.string(), read.payload_or_problem, fate);
   } else if (read.outcome == FileRead::kUnreadable) {
-    spdlog::warn("event=bake_cache_unreadable file=\"{}\" problem=\"{}\" outcome=miss", path.string(),
-                 read.payload_or_problem);
+    spdlog::warn("event=bake_cache_unreadable file=\"{}\" problem=\"{}\" outcome=miss",
+                 path.string(), read.payload_or_problem);
   }
   std::lock_guard lock(mutex_);
   ++stats_.misses;
@@ -232,7 +233,9 @@ void BakeCache::put(const std::string& key_hex, std::string bytes) {
   }
 }
 
-void BakeCache::set_disk_budget(uint64_t bytes) { disk_budget_ = bytes; }
+void BakeCache::set_disk_budget(uint64_t bytes) {
+  disk_budget_ = bytes;
+}
 
 void BakeCache::trim_disk(const std::string& keep_key) {
   struct Entry {
@@ -262,7 +265,8 @@ void BakeCache::trim_disk(const std::string& keep_key) {
     files.push_back({time, size, e.path()});
     total += size;
   }
-  std::sort(files.begin(), files.end(), [](const Entry& a, const Entry& b) { return a.time < b.time; });
+  std::sort(files.begin(), files.end(),
+            [](const Entry& a, const Entry& b) { return a.time < b.time; });
   for (const Entry& f : files) {
     if (total <= disk_budget_) break;
     std::error_code re;

@@ -54,9 +54,9 @@ class BakeCache {
   explicit BakeCache(std::filesystem::path dir = {}, size_t memory_budget_bytes = 512u << 20);
 
   // Returns the product's bytes, or nullopt. Looks in memory, then on disk; a disk file whose
-  // header (magic, version, size, this key) or checksum does not verify is counted in stats().corrupt, renamed aside to
-  // <key>.corrupt, logged, and reported as a miss so that the caller re-bakes and put()s.
-  // Throws std::invalid_argument unless is_bake_key(key_hex).
+  // header (magic, version, size, this key) or checksum does not verify is counted in
+  // stats().corrupt, renamed aside to <key>.corrupt, logged, and reported as a miss so that the
+  // caller re-bakes and put()s. Throws std::invalid_argument unless is_bake_key(key_hex).
   std::optional<std::shared_ptr<const std::string>> get(const std::string& key_hex);
 
   // Stores in memory and (if dir) on disk: written to a temporary file in dir, then renamed over

@@ -8,16 +8,22 @@ namespace scatter {
 
 std::string to_string(BakeJob::State s) {
   switch (s) {
-    case BakeJob::State::Queued: return "queued";
-    case BakeJob::State::Running: return "running";
-    case BakeJob::State::Done: return "done";
-    case BakeJob::State::Failed: return "failed";
-    case BakeJob::State::Cancelled: return "cancelled";
+    case BakeJob::State::Queued:
+      return "queued";
+    case BakeJob::State::Running:
+      return "running";
+    case BakeJob::State::Done:
+      return "done";
+    case BakeJob::State::Failed:
+      return "failed";
+    case BakeJob::State::Cancelled:
+      return "cancelled";
   }
   return "unknown";
 }
 
-BakeJob::BakeJob(std::string id, std::string pipeline, std::vector<std::pair<std::string, double>> stage_weights)
+BakeJob::BakeJob(std::string id, std::string pipeline,
+                 std::vector<std::pair<std::string, double>> stage_weights)
     : id_(std::move(id)), pipeline_(std::move(pipeline)), weights_(std::move(stage_weights)) {
   static std::atomic<uint64_t> next{0};
   serial_ = next++;
@@ -38,7 +44,8 @@ void BakeJob::report(const std::string& stage, double fraction) {
     }
     before += w;
   }
-  if (found) progress_ = std::max(progress_, std::min(1.0, before + share * std::clamp(fraction, 0.0, 1.0)));
+  if (found)
+    progress_ = std::max(progress_, std::min(1.0, before + share * std::clamp(fraction, 0.0, 1.0)));
 }
 
 void BakeJob::run(const std::function<BakeResult(const BakeProgress&)>& work) {
@@ -96,13 +103,15 @@ bool BakeJob::finished() const {
 
 nlohmann::json BakeJob::status() const {
   std::lock_guard lock(mutex_);
-  nlohmann::json j = {{"id", id_},
-                      {"pipeline", pipeline_},
-                      {"state", to_string(state_)},
-                      {"stage", stage_},
-                      {"progress", progress_},
-                      {"cancel_requested", cancel_.load()},
-                      {"age_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - created_).count()}};
+  nlohmann::json j = {
+      {"id", id_},
+      {"pipeline", pipeline_},
+      {"state", to_string(state_)},
+      {"stage", stage_},
+      {"progress", progress_},
+      {"cancel_requested", cancel_.load()},
+      {"age_s",
+       std::chrono::duration<double>(std::chrono::steady_clock::now() - created_).count()}};
   if (!error_.empty()) j["error"] = error_;
   if (result_) {
     j["needed"] = result_->needed;
@@ -125,10 +134,10 @@ std::string BakeJobs::id_for(const std::string& identity) {
   return is_bake_key(identity) ? identity : sha256_hex(identity).substr(0, 16);
 }
 
-std::shared_ptr<BakeJob> BakeJobs::submit(const std::string& identity, const std::string& pipeline,
-                                          std::vector<std::pair<std::string, double>> stage_weights,
-                                          const std::function<void(std::shared_ptr<BakeJob>)>& start,
-                                          bool* created) {
+std::shared_ptr<BakeJob> BakeJobs::submit(
+    const std::string& identity, const std::string& pipeline,
+    std::vector<std::pair<std::string, double>> stage_weights,
+    const std::function<void(std::shared_ptr<BakeJob>)>& start, bool* created) {
   std::string id = id_for(identity);
   std::shared_ptr<BakeJob> job;
   {
@@ -153,7 +162,8 @@ std::shared_ptr<BakeJob> BakeJobs::submit(const std::string& identity, const std
     while (jobs_.size() > kMaxKept) {
       auto oldest = jobs_.end();
       for (auto it = jobs_.begin(); it != jobs_.end(); ++it)
-        if (it->second->finished() && (oldest == jobs_.end() || it->second->serial() < oldest->second->serial()))
+        if (it->second->finished() &&
+            (oldest == jobs_.end() || it->second->serial() < oldest->second->serial()))
           oldest = it;
       if (oldest == jobs_.end()) break;
       jobs_.erase(oldest);

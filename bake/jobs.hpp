@@ -12,12 +12,11 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "bake/bake_result.hpp"
 
@@ -31,7 +30,8 @@ class BakeJob {
  public:
   enum class State { Queued, Running, Done, Failed, Cancelled };
 
-  BakeJob(std::string id, std::string pipeline, std::vector<std::pair<std::string, double>> stage_weights);
+  BakeJob(std::string id, std::string pipeline,
+          std::vector<std::pair<std::string, double>> stage_weights);
 
   const std::string& id() const { return id_; }
   // Runs `work` with a progress callback (which throws BakeCancelled once cancel() was asked),
@@ -65,8 +65,8 @@ std::string to_string(BakeJob::State s);
 
 class BakeJobs {
  public:
-  static constexpr int kMaxActive = 8;      // queued or running at once; more: Busy
-  static constexpr size_t kMaxKept = 256;   // job records kept; the oldest finished go first
+  static constexpr int kMaxActive = 8;     // queued or running at once; more: Busy
+  static constexpr size_t kMaxKept = 256;  // job records kept; the oldest finished go first
   struct Busy : std::runtime_error {
     Busy() : std::runtime_error("too many bakes queued or running; try again when one finishes") {}
   };
@@ -76,7 +76,8 @@ class BakeJobs {
   // run. `created` says which. Throws Busy when kMaxActive jobs are queued or running.
   std::shared_ptr<BakeJob> submit(const std::string& identity, const std::string& pipeline,
                                   std::vector<std::pair<std::string, double>> stage_weights,
-                                  const std::function<void(std::shared_ptr<BakeJob>)>& start, bool* created);
+                                  const std::function<void(std::shared_ptr<BakeJob>)>& start,
+                                  bool* created);
   std::shared_ptr<BakeJob> find(const std::string& id) const;
   std::vector<std::shared_ptr<BakeJob>> list() const;
   // Jobs in each state, for metrics.

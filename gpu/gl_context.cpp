@@ -17,7 +17,8 @@ std::string egl_error() {
 // Tries the platforms a headless machine may offer, in order, and initialises the first that works.
 EGLDisplay open_display(std::string& platform) {
   if (epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_MESA_platform_surfaceless")) {
-    EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+    EGLDisplay d =
+        eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
     if (d != EGL_NO_DISPLAY && eglInitialize(d, nullptr, nullptr)) {
       platform = "surfaceless";
       return d;
@@ -50,7 +51,8 @@ GlContext::GlContext() {
   EGLDisplay display = open_display(platform_);
   display_ = display;
   try {
-    if (!eglBindAPI(EGL_OPENGL_API)) throw GpuError("EGL cannot bind the OpenGL API (" + egl_error() + ")");
+    if (!eglBindAPI(EGL_OPENGL_API))
+      throw GpuError("EGL cannot bind the OpenGL API (" + egl_error() + ")");
     const EGLint config_attribs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
     EGLConfig config = nullptr;
     EGLint n = 0;
@@ -59,12 +61,17 @@ GlContext::GlContext() {
         throw GpuError("EGL offers no OpenGL-capable config");
       config = EGL_NO_CONFIG_KHR;
     }
-    const EGLint context_attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
+    const EGLint context_attribs[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                      4,
+                                      EGL_CONTEXT_MINOR_VERSION,
+                                      5,
                                       EGL_CONTEXT_OPENGL_PROFILE_MASK,
-                                      EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+                                      EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                      EGL_NONE};
     EGLContext ctx = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attribs);
     if (ctx == EGL_NO_CONTEXT)
-      throw GpuError("the EGL driver cannot create an OpenGL 4.5 core context (" + egl_error() + ")");
+      throw GpuError("the EGL driver cannot create an OpenGL 4.5 core context (" + egl_error() +
+                     ")");
     context_ = ctx;
     make_current();
     auto text = [](GLenum name) {
@@ -89,7 +96,8 @@ GlContext::~GlContext() {
 
 void GlContext::make_current() {
   if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
-    throw GpuError("cannot make the OpenGL context current without a surface (" + egl_error() + ")");
+    throw GpuError("cannot make the OpenGL context current without a surface (" + egl_error() +
+                   ")");
 }
 
 }  // namespace scatter::gpu

@@ -11,12 +11,24 @@ namespace scatter::gpu {
 GlObject GlObject::create(GlKind kind, GLenum shader_type) {
   GLuint n = 0;
   switch (kind) {
-    case GlKind::Buffer: glCreateBuffers(1, &n); break;
-    case GlKind::Texture: glGenTextures(1, &n); break;
-    case GlKind::Framebuffer: glCreateFramebuffers(1, &n); break;
-    case GlKind::VertexArray: glCreateVertexArrays(1, &n); break;
-    case GlKind::Program: n = glCreateProgram(); break;
-    case GlKind::Shader: n = glCreateShader(shader_type); break;
+    case GlKind::Buffer:
+      glCreateBuffers(1, &n);
+      break;
+    case GlKind::Texture:
+      glGenTextures(1, &n);
+      break;
+    case GlKind::Framebuffer:
+      glCreateFramebuffers(1, &n);
+      break;
+    case GlKind::VertexArray:
+      glCreateVertexArrays(1, &n);
+      break;
+    case GlKind::Program:
+      n = glCreateProgram();
+      break;
+    case GlKind::Shader:
+      n = glCreateShader(shader_type);
+      break;
   }
   if (n == 0) throw GpuError("cannot create an OpenGL object (is a context current?)");
   return GlObject(kind, n);
@@ -25,12 +37,24 @@ GlObject GlObject::create(GlKind kind, GLenum shader_type) {
 void GlObject::reset() {
   if (name_ == 0) return;
   switch (kind_) {
-    case GlKind::Buffer: glDeleteBuffers(1, &name_); break;
-    case GlKind::Texture: glDeleteTextures(1, &name_); break;
-    case GlKind::Framebuffer: glDeleteFramebuffers(1, &name_); break;
-    case GlKind::VertexArray: glDeleteVertexArrays(1, &name_); break;
-    case GlKind::Program: glDeleteProgram(name_); break;
-    case GlKind::Shader: glDeleteShader(name_); break;
+    case GlKind::Buffer:
+      glDeleteBuffers(1, &name_);
+      break;
+    case GlKind::Texture:
+      glDeleteTextures(1, &name_);
+      break;
+    case GlKind::Framebuffer:
+      glDeleteFramebuffers(1, &name_);
+      break;
+    case GlKind::VertexArray:
+      glDeleteVertexArrays(1, &name_);
+      break;
+    case GlKind::Program:
+      glDeleteProgram(name_);
+      break;
+    case GlKind::Shader:
+      glDeleteShader(name_);
+      break;
   }
   name_ = 0;
 }

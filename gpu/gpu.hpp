@@ -5,8 +5,8 @@
 #include <memory>
 #include <string>
 
-#include "gpu/cl_context.hpp"
 #include "core/errors.hpp"
+#include "gpu/cl_context.hpp"
 #include "gpu/gl_context.hpp"
 
 namespace scatter::gpu {

@@ -28,12 +28,15 @@ std::vector<SettingInfo> delegate_settings() {
 void validate(const Settings& settings) {
   for (const auto& [key, value] : settings) {
     bool known = false;
-    for (const std::string& d : kDelegates) known = known || !AutoPipeline::settings_for(d, {{key, value}}).empty();
+    for (const std::string& d : kDelegates)
+      known = known || !AutoPipeline::settings_for(d, {{key, value}}).empty();
     if (!known)
-      throw ValidationError("settings." + key,
-                            "is not a setting of pipeline auto (it takes those of thickness and reference)");
+      throw ValidationError(
+          "settings." + key,
+          "is not a setting of pipeline auto (it takes those of thickness and reference)");
   }
-  for (const std::string& d : kDelegates) pipeline_info(d).validate(AutoPipeline::settings_for(d, settings));
+  for (const std::string& d : kDelegates)
+    pipeline_info(d).validate(AutoPipeline::settings_for(d, settings));
 }
 
 }  // namespace
@@ -48,7 +51,9 @@ Settings AutoPipeline::settings_for(const std::string& delegate, const Settings&
 const PipelineInfo& auto_info() {
   static const PipelineInfo info{
       .name = "auto",
-      .summary = "chooses the cheapest pipeline that renders the scene and the terms, and says why in the plan",
+      .summary =
+          "chooses the cheapest pipeline that renders the scene and the terms, and says why in the "
+          "plan",
       .method = "docs/pipelines/auto.md",
       .terms = {Terms::Single, Terms::Multiple, Terms::All},
       .default_terms = Terms::Single,
@@ -64,6 +69,8 @@ const PipelineInfo& auto_info() {
   return info;
 }
 
-const PipelineInfo& AutoPipeline::info() const { return auto_info(); }
+const PipelineInfo& AutoPipeline::info() const {
+  return auto_info();
+}
 
 }  // namespace scatter

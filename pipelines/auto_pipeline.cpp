@@ -8,16 +8,20 @@ const PipelineInfo& auto_info();
 
 std::pair<std::string, std::string> AutoPipeline::choose(const Scene& scene, Terms terms) {
   if (!scene.medium.density->homogeneous())
-    return {"reference", "inhomogeneous medium: the reference is exact; single (baked, 3-7 % off on the "
-                         "benchmark scenes), psf and lbl render it faster when asked for"};
+    return {"reference",
+            "inhomogeneous medium: the reference is exact; single (baked, 3-7 % off on the "
+            "benchmark scenes), psf and lbl render it faster when asked for"};
   if (scene.medium.ior != 1.0)
-    return {"reference", "a dielectric boundary (ior != 1): thickness neglects Fresnel and refraction"};
+    return {"reference",
+            "a dielectric boundary (ior != 1): thickness neglects Fresnel and refraction"};
   if (terms != Terms::Single)
-    return {"reference", "the " + to_string(terms) + " term: the reference; lbl and psf render it faster "
-                                                     "but further from it (docs/BENCHMARKS.md)"};
+    return {"reference", "the " + to_string(terms) +
+                             " term: the reference; lbl and psf render it faster "
+                             "but further from it (docs/BENCHMARKS.md)"};
   Aabb b = scene.mesh->bounds();
   for (const Light& l : scene.lights)
-    if (l.type != Light::Type::Directional && length(l.position - b.center()) <= length(b.size()) / 2 * 1.05)
+    if (l.type != Light::Type::Directional &&
+        length(l.position - b.center()) <= length(b.size()) / 2 * 1.05)
       return {"reference", "a light inside the object's bounding sphere: no shadow map can see it"};
   return {"thickness",
           "homogeneous medium: the thickness path serves it; the optical-depth bake is skipped "

@@ -1,14 +1,13 @@
 #include "pipelines/image.hpp"
 
-#include <array>
-
-#include <png.h>
-
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
-#include <fstream>
+#include <png.h>
+
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <memory>
 #include <stdexcept>
 
@@ -76,8 +75,7 @@ std::string encode_png(const Image& image, const ToneMap& tone) {
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
   png_write_info(png, info);
-  for (int y = 0; y < image.height; ++y)
-    png_write_row(png, &bytes[size_t(y) * image.width * 3]);
+  for (int y = 0; y < image.height; ++y) png_write_row(png, &bytes[size_t(y) * image.width * 3]);
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
   return out;
@@ -92,8 +90,8 @@ std::string encode_oiio(const Image& image, const std::string& format, const Ton
   auto out = OIIO::ImageOutput::create(name);
   if (!out || !out->set_ioproxy(&proxy))
     throw std::runtime_error("OpenImageIO cannot encode " + format + ": " + OIIO::geterror());
-  OIIO::ImageSpec spec(image.width, image.height, 3, linear ? OIIO::TypeDesc::FLOAT
-                                                            : OIIO::TypeDesc::UINT8);
+  OIIO::ImageSpec spec(image.width, image.height, 3,
+                       linear ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
   bool ok = out->open(name, spec);
   if (ok && linear) {
     ok = out->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data());
@@ -101,7 +99,8 @@ std::string encode_oiio(const Image& image, const std::string& format, const Ton
     std::vector<unsigned char> bytes = to_srgb8(image, tone);
     ok = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
   }
-  if (!ok || !out->close()) throw std::runtime_error("cannot encode " + format + ": " + out->geterror());
+  if (!ok || !out->close())
+    throw std::runtime_error("cannot encode " + format + ": " + out->geterror());
   return std::string(buffer.begin(), buffer.end());
 }
 
@@ -140,7 +139,8 @@ void check_image_path(const std::filesystem::path& path) {
 
 std::string encode_image(const Image& image, const std::string& format, const ToneMap& tone) {
   if (format == "png") return encode_png(image, tone);
-  if (format == "exr" || format == "jpg" || format == "jpeg") return encode_oiio(image, format, tone);
+  if (format == "exr" || format == "jpg" || format == "jpeg")
+    return encode_oiio(image, format, tone);
   throw std::runtime_error("unknown image format \"" + format + "\" (use exr, png or jpg)");
 }
 

@@ -14,10 +14,14 @@ namespace scatter {
 
 std::string to_string(Terms t) {
   switch (t) {
-    case Terms::Surface: return "surface";
-    case Terms::Single: return "single";
-    case Terms::Multiple: return "multiple";
-    case Terms::All: return "all";
+    case Terms::Surface:
+      return "surface";
+    case Terms::Single:
+      return "single";
+    case Terms::Multiple:
+      return "multiple";
+    case Terms::All:
+      return "all";
   }
   return "all";
 }
@@ -25,7 +29,8 @@ std::string to_string(Terms t) {
 Terms parse_terms(const std::string& s) {
   for (Terms t : {Terms::Surface, Terms::Single, Terms::Multiple, Terms::All})
     if (to_string(t) == s) return t;
-  throw ValidationError("terms", "must be one of surface, single, multiple, all; got \"" + s + "\"");
+  throw ValidationError("terms",
+                        "must be one of surface, single, multiple, all; got \"" + s + "\"");
 }
 
 void to_json(nlohmann::json& j, const StagePlan& s) {
@@ -67,9 +72,15 @@ StagePlan& plan_stage(Plan& plan, const std::string& name) {
   throw std::logic_error("plan " + plan.pipeline + " has no stage " + name);
 }
 
-std::string Pipeline::name() const { return info().name; }
-std::vector<Terms> Pipeline::supported_terms() const { return info().terms; }
-std::vector<std::pair<std::string, double>> Pipeline::bake_stages() const { return info().bake_stages; }
+std::string Pipeline::name() const {
+  return info().name;
+}
+std::vector<Terms> Pipeline::supported_terms() const {
+  return info().terms;
+}
+std::vector<std::pair<std::string, double>> Pipeline::bake_stages() const {
+  return info().bake_stages;
+}
 
 std::string short_number(double v) {
   char buf[32];
@@ -83,6 +94,8 @@ std::string exact_number(double v) {
   return std::string(buf, r.ptr);
 }
 
-void require_terms(const Pipeline& pipeline, Terms terms) { require_terms(pipeline.info(), terms); }
+void require_terms(const Pipeline& pipeline, Terms terms) {
+  require_terms(pipeline.info(), terms);
+}
 
 }  // namespace scatter

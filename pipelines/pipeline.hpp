@@ -9,12 +9,11 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "bake/bake_result.hpp"
 #include "gpu/gpu.hpp"
@@ -96,7 +95,9 @@ class Pipeline {
   std::vector<std::pair<std::string, double>> bake_stages() const;
   virtual Plan plan(const Scene& scene, const RenderRequest& request) = 0;
   // Makes (or finds in the cache) what render() will need for this scene and request's settings.
-  virtual BakeResult bake(const Scene&, const RenderRequest&, const BakeProgress& = {}) { return {}; }
+  virtual BakeResult bake(const Scene&, const RenderRequest&, const BakeProgress& = {}) {
+    return {};
+  }
   virtual RenderResult render(const Scene& scene, const RenderRequest& request) = 0;
 };
 
@@ -104,7 +105,8 @@ class Pipeline {
 std::vector<std::string> pipeline_names();
 // Throws ValidationError (field "pipeline") for an unknown name. Pipelines that bake keep their
 // products in `cache` (shared, content-addressed); without one they keep a private memory cache.
-std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu, BakeCache* cache = nullptr);
+std::unique_ptr<Pipeline> make_pipeline(const std::string& name, gpu::Gpu& gpu,
+                                        BakeCache* cache = nullptr);
 
 // v with 3 significant digits, for plan reasons ("0.05", "1e+03").
 std::string short_number(double v);

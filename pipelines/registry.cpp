@@ -18,9 +18,9 @@ const PipelineInfo& psf_info();
 const PipelineInfo& lbl_info();
 
 const std::vector<const PipelineInfo*>& registry() {
-  static const std::vector<const PipelineInfo*> all = {&auto_info(),   &surface_info(), &reference_info(),
-                                                       &thickness_info(), &single_info(), &psf_info(),
-                                                       &lbl_info()};
+  static const std::vector<const PipelineInfo*> all = {
+      &auto_info(),   &surface_info(), &reference_info(), &thickness_info(),
+      &single_info(), &psf_info(),     &lbl_info()};
   return all;
 }
 
@@ -32,14 +32,16 @@ const PipelineInfo& pipeline_info(const std::string& name) {
   throw ValidationError("pipeline", "unknown pipeline \"" + name + "\" (known: " + list + ")");
 }
 
-bool PipelineInfo::renders(Terms t) const { return std::find(terms.begin(), terms.end(), t) != terms.end(); }
+bool PipelineInfo::renders(Terms t) const {
+  return std::find(terms.begin(), terms.end(), t) != terms.end();
+}
 
 void require_terms(const PipelineInfo& info, Terms terms) {
   if (info.renders(terms)) return;
   std::string list;
   for (Terms t : info.terms) list += (list.empty() ? "" : ", ") + to_string(t);
-  throw ValidationError("terms", "pipeline " + info.name + " cannot render the " + to_string(terms) +
-                                     " term (it renders: " + list + ")");
+  throw ValidationError("terms", "pipeline " + info.name + " cannot render the " +
+                                     to_string(terms) + " term (it renders: " + list + ")");
 }
 
 std::vector<std::string> pipeline_names() {
@@ -56,8 +58,10 @@ void to_json(nlohmann::json& j, const PipelineInfo& p) {
   nlohmann::json terms = nlohmann::json::array(), stages = nlohmann::json::array(),
                  qualities = nlohmann::json::array();
   for (Terms t : p.terms) terms.push_back(to_string(t));
-  for (const auto& [stage, weight] : p.bake_stages) stages.push_back({{"stage", stage}, {"weight", weight}});
-  for (const Quality& q : p.qualities) qualities.push_back({{"name", q.name}, {"settings", q.settings}});
+  for (const auto& [stage, weight] : p.bake_stages)
+    stages.push_back({{"stage", stage}, {"weight", weight}});
+  for (const Quality& q : p.qualities)
+    qualities.push_back({{"name", q.name}, {"settings", q.settings}});
   j = {{"name", p.name},
        {"summary", p.summary},
        {"method", p.method},
@@ -94,18 +98,20 @@ std::string settings_markdown(const PipelineInfo& p) {
     md << "`" << p.name << "` has no settings.\n";
     return md.str();
   }
-  md << "| setting | kind | default | range | shapes | what it does |\n| --- | --- | --- | --- | --- | --- |\n";
+  md << "| setting | kind | default | range | shapes | what it does |\n| --- | --- | --- | --- | "
+        "--- | --- |\n";
   for (const SettingInfo& s : p.settings) {
     std::string range;
     if (!s.allowed.empty()) {
       for (double v : s.allowed) range += (range.empty() ? "" : ", ") + cell(v, s.kind);
     } else {
-      range = s.kind == SettingKind::Flag ? "0, 1" : cell(s.lo, s.kind) + " to " + cell(s.hi, s.kind);
+      range =
+          s.kind == SettingKind::Flag ? "0, 1" : cell(s.lo, s.kind) + " to " + cell(s.hi, s.kind);
     }
     std::string shapes = to_string(s.shapes.what);
     if (s.shapes.what == Shapes::What::Kept) shapes += " (" + s.shapes.state + ")";
-    md << "| `" << s.key << "` | " << to_string(s.kind) << " | " << cell(s.def, s.kind) << " | " << range
-       << " | " << shapes << " | " << escaped(s.doc) << " |\n";
+    md << "| `" << s.key << "` | " << to_string(s.kind) << " | " << cell(s.def, s.kind) << " | "
+       << range << " | " << shapes << " | " << escaped(s.doc) << " |\n";
   }
   return md.str();
 }

@@ -7,12 +7,11 @@
 
 #include <functional>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
@@ -29,9 +28,9 @@ struct Quality {
 
 struct PipelineInfo {
   std::string name;
-  std::string summary;             // one line: what it renders and how
-  std::string method;              // where the method is described (paper, docs/pipelines/)
-  std::vector<Terms> terms;        // what it can render
+  std::string summary;               // one line: what it renders and how
+  std::string method;                // where the method is described (paper, docs/pipelines/)
+  std::vector<Terms> terms;          // what it can render
   Terms default_terms = Terms::All;  // what a live view asks of it unless told
   std::vector<SettingInfo> settings;
   // Throws ValidationError for a setting render() would reject (unknown key, range, kind, rule).
@@ -58,8 +57,10 @@ PipelineInfo describe(const SettingsTable<S>& table, PipelineInfo info) {
   info.settings = table.info();
   info.validate = [&table](const Settings& s) { table.read(s); };
   info.make = [](gpu::Gpu& gpu, BakeCache* cache) -> std::unique_ptr<Pipeline> {
-    if constexpr (std::is_constructible_v<P, gpu::Gpu&, BakeCache*>) return std::make_unique<P>(gpu, cache);
-    else return std::make_unique<P>(gpu);
+    if constexpr (std::is_constructible_v<P, gpu::Gpu&, BakeCache*>)
+      return std::make_unique<P>(gpu, cache);
+    else
+      return std::make_unique<P>(gpu);
   };
   info.estimate = &P::estimate;
   return info;

@@ -8,26 +8,31 @@ namespace scatter {
 
 std::string to_string(SettingKind k) {
   switch (k) {
-    case SettingKind::Number: return "number";
-    case SettingKind::Integer: return "integer";
-    case SettingKind::Flag: return "flag";
+    case SettingKind::Number:
+      return "number";
+    case SettingKind::Integer:
+      return "integer";
+    case SettingKind::Flag:
+      return "flag";
   }
   return "number";
 }
 
 std::string to_string(Shapes::What w) {
   switch (w) {
-    case Shapes::What::Frame: return "frame";
-    case Shapes::What::Bake: return "bake";
-    case Shapes::What::Kept: return "kept";
+    case Shapes::What::Frame:
+      return "frame";
+    case Shapes::What::Bake:
+      return "bake";
+    case Shapes::What::Kept:
+      return "kept";
   }
   return "frame";
 }
 
 void to_json(nlohmann::json& j, const SettingInfo& s) {
-  j = {{"key", s.key},   {"kind", to_string(s.kind)}, {"default", s.def},
-       {"min", s.lo},    {"max", s.hi},               {"shapes", to_string(s.shapes.what)},
-       {"doc", s.doc}};
+  j = {{"key", s.key}, {"kind", to_string(s.kind)},          {"default", s.def}, {"min", s.lo},
+       {"max", s.hi},  {"shapes", to_string(s.shapes.what)}, {"doc", s.doc}};
   if (s.shapes.what == Shapes::What::Kept) j["state"] = s.shapes.state;
   if (!s.allowed.empty()) j["allowed"] = s.allowed;
 }

@@ -6,19 +6,19 @@
 //
 //   const SettingsTable<LblSettings>& lbl_settings() {
 //     static const SettingsTable<LblSettings> t("lbl", {
-//         setting("rays", &LblSettings::rays, 0.25, 8, kept("lights"), "light rays per voxel width"),
+//         setting("rays", &LblSettings::rays, 0.25, 8, kept("lights"), "light rays per voxel
+//         width"),
 //         ...});
 //     return t;
 //   }
 #pragma once
 
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "bake/cache.hpp"
 #include "pipelines/pipeline.hpp"
@@ -34,9 +34,15 @@ struct Shapes {
   enum class What { Frame, Bake, Kept } what = What::Frame;
   std::string state;  // Kept: which state ("material", "lights", ...)
 };
-inline Shapes frame() { return {}; }
-inline Shapes baked() { return {Shapes::What::Bake, "bake"}; }
-inline Shapes kept(std::string state) { return {Shapes::What::Kept, std::move(state)}; }
+inline Shapes frame() {
+  return {};
+}
+inline Shapes baked() {
+  return {Shapes::What::Bake, "bake"};
+}
+inline Shapes kept(std::string state) {
+  return {Shapes::What::Kept, std::move(state)};
+}
 
 struct SettingInfo {
   std::string key;
@@ -63,7 +69,8 @@ class SettingsTable {
   };
 
   // `check` runs after the rows: rules across settings ("18 directions need blocked 0").
-  SettingsTable(std::string pipeline, std::vector<Row> rows, std::function<void(const S&)> check = {})
+  SettingsTable(std::string pipeline, std::vector<Row> rows,
+                std::function<void(const S&)> check = {})
       : pipeline_(std::move(pipeline)), rows_(std::move(rows)), check_(std::move(check)) {
     for (const Row& r : rows_) info_.push_back(r.info);
   }
@@ -106,22 +113,27 @@ namespace settings_detail {
 
 template <class M>
 constexpr SettingKind kind_of() {
-  if constexpr (std::is_same_v<M, bool>) return SettingKind::Flag;
-  else if constexpr (std::is_integral_v<M>) return SettingKind::Integer;
-  else return SettingKind::Number;
+  if constexpr (std::is_same_v<M, bool>)
+    return SettingKind::Flag;
+  else if constexpr (std::is_integral_v<M>)
+    return SettingKind::Integer;
+  else
+    return SettingKind::Number;
 }
 
 template <class S, class M, class Access>
-typename SettingsTable<S>::Row row(std::string key, Access access, double lo, double hi, Shapes shapes,
-                                   std::string doc) {
+typename SettingsTable<S>::Row row(std::string key, Access access, double lo, double hi,
+                                   Shapes shapes, std::string doc) {
   const S defaults{};
-  SettingInfo info{std::move(key), kind_of<M>(), double(access(defaults)), lo, hi, {}, std::move(shapes),
-                   std::move(doc)};
+  SettingInfo info{std::move(key),    kind_of<M>(),  double(access(defaults)), lo, hi, {},
+                   std::move(shapes), std::move(doc)};
   if (info.kind == SettingKind::Flag) info.lo = 0, info.hi = 1;
   auto set = [access](S& s, double v) {
     auto& m = const_cast<M&>(access(static_cast<const S&>(s)));
-    if constexpr (std::is_same_v<M, bool>) m = v != 0;
-    else m = static_cast<M>(v);
+    if constexpr (std::is_same_v<M, bool>)
+      m = v != 0;
+    else
+      m = static_cast<M>(v);
   };
   auto get = [access](const S& s) { return double(access(s)); };
   return {std::move(info), set, get};
@@ -132,10 +144,11 @@ typename SettingsTable<S>::Row row(std::string key, Access access, double lo, do
 // A row for member `m` of S (default: S{}.*m). The member's type gives the kind: bool a flag
 // (0 or 1), an integer type an integer, a floating type a number.
 template <class S, class M>
-typename SettingsTable<S>::Row setting(std::string key, M S::*m, double lo, double hi, Shapes shapes,
-                                       std::string doc) {
-  return settings_detail::row<S, M>(std::move(key), [m](const S& s) -> const M& { return s.*m; }, lo, hi,
-                                    std::move(shapes), std::move(doc));
+typename SettingsTable<S>::Row setting(std::string key, M S::*m, double lo, double hi,
+                                       Shapes shapes, std::string doc) {
+  return settings_detail::row<S, M>(
+      std::move(key), [m](const S& s) -> const M& { return s.*m; }, lo, hi, std::move(shapes),
+      std::move(doc));
 }
 
 // A row for member `m` of the nested struct `outer` of S.
@@ -143,8 +156,8 @@ template <class S, class O, class M>
 typename SettingsTable<S>::Row setting(std::string key, O S::*outer, M O::*m, double lo, double hi,
                                        Shapes shapes, std::string doc) {
   return settings_detail::row<S, M>(
-      std::move(key), [outer, m](const S& s) -> const M& { return (s.*outer).*m; }, lo, hi, std::move(shapes),
-      std::move(doc));
+      std::move(key), [outer, m](const S& s) -> const M& { return (s.*outer).*m; }, lo, hi,
+      std::move(shapes), std::move(doc));
 }
 
 // A flag row (range [0, 1]).

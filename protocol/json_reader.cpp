@@ -6,7 +6,9 @@
 namespace scatter {
 namespace {
 
-std::string type_name(const nlohmann::json& v) { return v.type_name(); }
+std::string type_name(const nlohmann::json& v) {
+  return v.type_name();
+}
 
 std::string format_number(double v) {
   std::ostringstream s;
@@ -30,10 +32,13 @@ double checked_number(const nlohmann::json& v, const std::string& path, Range ra
 
 JsonObject::JsonObject(const nlohmann::json& value, std::string path)
     : value_(value), path_(std::move(path)) {
-  if (!value_.is_object()) throw ValidationError(path_, "must be an object, got " + type_name(value_));
+  if (!value_.is_object())
+    throw ValidationError(path_, "must be an object, got " + type_name(value_));
 }
 
-bool JsonObject::has(std::string_view key) const { return value_.contains(key); }
+bool JsonObject::has(std::string_view key) const {
+  return value_.contains(key);
+}
 
 std::string JsonObject::path(std::string_view key) const {
   return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
@@ -57,7 +62,8 @@ double JsonObject::number(std::string_view key, std::optional<double> fallback, 
 int JsonObject::integer(std::string_view key, std::optional<int> fallback, Range range) {
   const auto* v = find(key, !fallback);
   if (!v) return *fallback;
-  if (!v->is_number_integer() && !(v->is_number() && std::floor(v->get<double>()) == v->get<double>()))
+  if (!v->is_number_integer() &&
+      !(v->is_number() && std::floor(v->get<double>()) == v->get<double>()))
     throw ValidationError(path(key), "must be an integer, got " + v->dump());
   return static_cast<int>(checked_number(*v, path(key), range));
 }
@@ -116,7 +122,9 @@ std::vector<double> JsonObject::numbers(std::string_view key, size_t min_len, si
   return r;
 }
 
-JsonObject JsonObject::object(std::string_view key) { return JsonObject(*find(key, true), path(key)); }
+JsonObject JsonObject::object(std::string_view key) {
+  return JsonObject(*find(key, true), path(key));
+}
 
 std::optional<JsonObject> JsonObject::optional_object(std::string_view key) {
   const auto* v = find(key, false);
@@ -144,7 +152,8 @@ nlohmann::json parse_json(std::string_view text, const std::string& what, int ma
     bool opens = event == nlohmann::json::parse_event_t::object_start ||
                  event == nlohmann::json::parse_event_t::array_start;
     if (opens && depth >= max_depth)
-      throw ValidationError(what, "nests arrays and objects deeper than " + std::to_string(max_depth) + " levels");
+      throw ValidationError(
+          what, "nests arrays and objects deeper than " + std::to_string(max_depth) + " levels");
     return true;
   };
   try {
@@ -154,8 +163,8 @@ nlohmann::json parse_json(std::string_view text, const std::string& what, int ma
     // (out_of_range, "1e999"); strip the library's "[json.exception...]" prefix.
     std::string msg = e.what();
     auto pos = msg.find("] ");
-    throw ValidationError(what, "is not valid JSON: " +
-                                    (pos == std::string::npos ? msg : msg.substr(pos + 2)));
+    throw ValidationError(
+        what, "is not valid JSON: " + (pos == std::string::npos ? msg : msg.substr(pos + 2)));
   }
 }
 

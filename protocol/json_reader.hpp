@@ -4,13 +4,12 @@
 // error, not a silent default.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "core/vec.hpp"
@@ -69,6 +68,7 @@ constexpr int kMaxJsonDepth = 64;
 // Parses untrusted text; throws ValidationError(what, ...) naming the parser's position for
 // malformed input, and for nesting deeper than `max_depth` (checked in the parser's callback, as
 // each level opens, before anything recurses over the document).
-nlohmann::json parse_json(std::string_view text, const std::string& what, int max_depth = kMaxJsonDepth);
+nlohmann::json parse_json(std::string_view text, const std::string& what,
+                          int max_depth = kMaxJsonDepth);
 
 }  // namespace scatter

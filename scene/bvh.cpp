@@ -51,8 +51,9 @@ struct Builder {
       return node;
     }
     size_t half = count / 2;
-    std::nth_element(order.begin() + first, order.begin() + first + half, order.begin() + first + count,
-                     [&](uint32_t x, uint32_t y) { return centroids[x][axis] < centroids[y][axis]; });
+    std::nth_element(
+        order.begin() + first, order.begin() + first + half, order.begin() + first + count,
+        [&](uint32_t x, uint32_t y) { return centroids[x][axis] < centroids[y][axis]; });
     build(first, half);
     size_t second = build(first + half, count - half);
     out.links[2 * node] = static_cast<int32_t>(second);
@@ -93,15 +94,18 @@ FlatBvh build_bvh(const Mesh& mesh) {
   size_t n = mesh.triangle_count();
   b.centroids.resize(n);
   for (size_t t = 0; t < n; ++t)
-    b.centroids[t] = (mesh.positions[mesh.indices[3 * t]] + mesh.positions[mesh.indices[3 * t + 1]] +
-                      mesh.positions[mesh.indices[3 * t + 2]]) / 3.0;
+    b.centroids[t] =
+        (mesh.positions[mesh.indices[3 * t]] + mesh.positions[mesh.indices[3 * t + 1]] +
+         mesh.positions[mesh.indices[3 * t + 2]]) /
+        3.0;
   b.order.resize(n);
   std::iota(b.order.begin(), b.order.end(), 0u);
   if (n > 0) b.build(0, n);
   return std::move(b.out);
 }
 
-double bvh_closest_hit(const FlatBvh& bvh, const Vec3& o, const Vec3& d, double t_min, double t_max) {
+double bvh_closest_hit(const FlatBvh& bvh, const Vec3& o, const Vec3& d, double t_min,
+                       double t_max) {
   if (bvh.links.empty()) return -1;
   double best = t_max;
   bool found = false;

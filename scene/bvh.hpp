@@ -24,6 +24,7 @@ FlatBvh build_bvh(const Mesh& mesh);
 
 // Closest hit of o + t d, t in (t_min, t_max), for testing the flattened layout on the CPU;
 // returns the distance or a negative value. The kernels implement the same traversal.
-double bvh_closest_hit(const FlatBvh& bvh, const Vec3& o, const Vec3& d, double t_min, double t_max);
+double bvh_closest_hit(const FlatBvh& bvh, const Vec3& o, const Vec3& d, double t_min,
+                       double t_max);
 
 }  // namespace scatter

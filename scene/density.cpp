@@ -25,7 +25,8 @@ class LayersDensity : public DensityField {
   LayersDensity(Vec3 axis, double thickness, std::vector<double> values)
       : axis_(axis), thickness_(thickness), values_(std::move(values)) {}
   double density(const Vec3& p) const override {
-    auto k = static_cast<long long>(std::clamp(std::floor(dot(p, axis_) / thickness_), -1e15, 1e15));
+    auto k =
+        static_cast<long long>(std::clamp(std::floor(dot(p, axis_) / thickness_), -1e15, 1e15));
     auto n = static_cast<long long>(values_.size());
     return values_[static_cast<size_t>(((k % n) + n) % n)];
   }
@@ -68,7 +69,8 @@ class GridDensity : public DensityField {
       std::snprintf(buf, sizeof buf, "%d %.17g %.17g ", n_[a], box_.lo[a], box_.hi[a]);
       head += buf;
     }
-    return sha256_hex(head + std::string(reinterpret_cast<const char*>(data_.data()), data_.size() * sizeof(float)));
+    return sha256_hex(head + std::string(reinterpret_cast<const char*>(data_.data()),
+                                         data_.size() * sizeof(float)));
   }
   // Trilinear between voxel centres; zero outside the grid's box.
   double density(const Vec3& p) const override {
@@ -117,15 +119,17 @@ class BlockerDensity : public DensityField {
 };
 
 std::shared_ptr<GridDensity> load_grid(JsonObject& obj, const std::filesystem::path& base_dir,
-                                              const GridLimits& limits) {
+                                       const GridLimits& limits) {
   std::filesystem::path header_path = base_dir / obj.string("file", std::nullopt);
   // A regular file of bounded size: a FIFO or a device named here would block or never end.
   constexpr uintmax_t kMaxHeaderBytes = 1 << 20;
   std::error_code ec;
   if (!std::filesystem::is_regular_file(header_path, ec))
-    throw ValidationError(obj.path("file"), "cannot open " + header_path.string() + ": not a regular file");
+    throw ValidationError(obj.path("file"),
+                          "cannot open " + header_path.string() + ": not a regular file");
   if (std::filesystem::file_size(header_path, ec) > kMaxHeaderBytes || ec)
-    throw ValidationError(obj.path("file"), "grid header " + header_path.string() + " is larger than " +
+    throw ValidationError(obj.path("file"), "grid header " + header_path.string() +
+                                                " is larger than " +
                                                 std::to_string(kMaxHeaderBytes) + " bytes");
   std::ifstream in(header_path);
   if (!in) throw ValidationError(obj.path("file"), "cannot open " + header_path.string());
@@ -137,8 +141,8 @@ std::shared_ptr<GridDensity> load_grid(JsonObject& obj, const std::filesystem::p
   for (int a = 0; a < 3; ++a) {
     if (!dims[a].is_number_integer() || dims[a].get<long long>() < 1 ||
         dims[a].get<long long>() > limits.max_dim)
-      throw ValidationError(h.path("dims"), "each must be an integer in [1, " +
-                                                std::to_string(limits.max_dim) + "]");
+      throw ValidationError(
+          h.path("dims"), "each must be an integer in [1, " + std::to_string(limits.max_dim) + "]");
     n[a] = dims[a].get<int>();
   }
   h.choice("format", {"float32"}, "float32");
@@ -152,7 +156,9 @@ std::shared_ptr<GridDensity> load_grid(JsonObject& obj, const std::filesystem::p
   std::filesystem::path data_path = header_path.parent_path() / h.string("data", std::nullopt);
   h.finish();
   size_t count = size_t(n[0]) * n[1] * n[2];
-  auto bytes = std::filesystem::is_regular_file(data_path, ec) ? std::filesystem::file_size(data_path, ec) : 0;
+  auto bytes = std::filesystem::is_regular_file(data_path, ec)
+                   ? std::filesystem::file_size(data_path, ec)
+                   : 0;
   if (ec || bytes != count * sizeof(float))
     throw ValidationError(header_path.string(), "data file " + data_path.string() + " must hold " +
                                                     std::to_string(count * sizeof(float)) +
@@ -163,8 +169,8 @@ std::shared_ptr<GridDensity> load_grid(JsonObject& obj, const std::filesystem::p
     throw ValidationError(header_path.string(), "cannot read data file " + data_path.string());
   for (size_t i = 0; i < count; ++i)
     if (!std::isfinite(data[i]) || data[i] < 0)
-      throw ValidationError(data_path.string(), "value " + std::to_string(i) +
-                                                    " is negative or not finite");
+      throw ValidationError(data_path.string(),
+                            "value " + std::to_string(i) + " is negative or not finite");
   return std::make_shared<GridDensity>(n[0], n[1], n[2], box, std::move(data));
 }
 

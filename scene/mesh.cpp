@@ -50,7 +50,8 @@ void Mesh::orient_outwards() {
 
 std::string WatertightReport::summary() const {
   return std::to_string(boundary_edges) + " boundary edges, " + std::to_string(nonmanifold_edges) +
-         " non-manifold edges, " + std::to_string(misoriented_edges) + " inconsistently oriented edges";
+         " non-manifold edges, " + std::to_string(misoriented_edges) +
+         " inconsistently oriented edges";
 }
 
 WatertightReport check_watertight(const Mesh& mesh) {
@@ -84,16 +85,21 @@ WatertightReport check_watertight(const Mesh& mesh) {
     }
   }
   for (const auto& [key, u] : edges) {
-    if (u.count == 1) ++report.boundary_edges;
-    else if (u.count > 2) ++report.nonmanifold_edges;
-    else if (u.direction != 0) ++report.misoriented_edges;
+    if (u.count == 1)
+      ++report.boundary_edges;
+    else if (u.count > 2)
+      ++report.nonmanifold_edges;
+    else if (u.direction != 0)
+      ++report.misoriented_edges;
   }
   return report;
 }
 
 std::string mesh_digest(const Mesh& mesh) {
-  std::string bytes(reinterpret_cast<const char*>(mesh.positions.data()), mesh.positions.size() * sizeof(Vec3));
-  bytes.append(reinterpret_cast<const char*>(mesh.indices.data()), mesh.indices.size() * sizeof(uint32_t));
+  std::string bytes(reinterpret_cast<const char*>(mesh.positions.data()),
+                    mesh.positions.size() * sizeof(Vec3));
+  bytes.append(reinterpret_cast<const char*>(mesh.indices.data()),
+               mesh.indices.size() * sizeof(uint32_t));
   return sha256_hex(bytes);
 }
 

@@ -14,7 +14,7 @@ namespace scatter {
 
 struct Mesh {
   std::vector<Vec3> positions;
-  std::vector<Vec3> normals;  // one per position, unit length
+  std::vector<Vec3> normals;      // one per position, unit length
   std::vector<uint32_t> indices;  // three per triangle, counter-clockwise seen from outside
 
   size_t triangle_count() const { return indices.size() / 3; }

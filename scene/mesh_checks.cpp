@@ -11,8 +11,12 @@ namespace scatter {
 namespace {
 
 // Assimp's line ends (ParsingUtils.h IsLineEnd) and spaces (IsSpace).
-bool line_end(char c) { return c == '\r' || c == '\n' || c == '\f'; }
-bool space(char c) { return c == ' ' || c == '\t'; }
+bool line_end(char c) {
+  return c == '\r' || c == '\n' || c == '\f';
+}
+bool space(char c) {
+  return c == ' ' || c == '\t';
+}
 constexpr size_t kMaxLine = 4000;  // assimp copies a line into char[4096]
 
 class OffReader {
@@ -23,7 +27,8 @@ class OffReader {
     throw std::runtime_error("OFF line " + std::to_string(line_number()) + ": " + problem);
   }
 
-  // The header's tokens: spaces, line ends and '#' comment lines are skipped (OFFLoader's NextToken).
+  // The header's tokens: spaces, line ends and '#' comment lines are skipped (OFFLoader's
+  // NextToken).
   std::string_view token() {
     skip_to_token();
     size_t start = pos_;
@@ -121,36 +126,44 @@ void check_off_text(std::string_view text) {
   if (nv == 0 || nf == 0) in.fail("the header counts no vertices or no faces");
   in.skip_to_token();
 
-  size_t per_vertex = dims + (homogeneous ? 1 : 0) + (normals ? 3 : 0) + (colors ? 1 : 0) + (st ? 2 : 0);
+  size_t per_vertex =
+      dims + (homogeneous ? 1 : 0) + (normals ? 3 : 0) + (colors ? 1 : 0) + (st ? 2 : 0);
   std::vector<std::string_view> tokens;
   for (unsigned long long v = 0; v < nv; ++v) {
     if (!in.line(tokens))
-      in.fail("the header counts " + std::to_string(nv) + " vertices, the file holds " + std::to_string(v));
+      in.fail("the header counts " + std::to_string(nv) + " vertices, the file holds " +
+              std::to_string(v));
     if (tokens.size() < per_vertex)
       in.fail("vertex " + std::to_string(v) + " needs " + std::to_string(per_vertex) + " numbers");
     for (std::string_view t : tokens)
-      if (!parse_real(t)) in.fail("vertex " + std::to_string(v) + ": \"" + std::string(t.substr(0, 40)) +
-                                  "\" is not a finite number");
+      if (!parse_real(t))
+        in.fail("vertex " + std::to_string(v) + ": \"" + std::string(t.substr(0, 40)) +
+                "\" is not a finite number");
   }
   for (unsigned long long f = 0; f < nf; ++f) {
     if (!in.line(tokens))
-      in.fail("the header counts " + std::to_string(nf) + " faces, the file holds " + std::to_string(f));
+      in.fail("the header counts " + std::to_string(nf) + " faces, the file holds " +
+              std::to_string(f));
     unsigned long long n = 0;
     if (tokens.empty() || !parse_count(tokens[0], 9, n) || n < 3)
       in.fail("face " + std::to_string(f) + " must start with its vertex count, 3 to 9");
-    if (tokens.size() < n + 1) in.fail("face " + std::to_string(f) + " names fewer than " + std::to_string(n) + " vertices");
+    if (tokens.size() < n + 1)
+      in.fail("face " + std::to_string(f) + " names fewer than " + std::to_string(n) + " vertices");
     for (size_t i = 1; i <= n; ++i) {
       unsigned long long index = 0;
       if (!parse_count(tokens[i], kMax, index) || index >= nv)
-        in.fail("face " + std::to_string(f) + " names vertex \"" + std::string(tokens[i].substr(0, 40)) +
-                "\"; there are " + std::to_string(nv) + " (0 to " + std::to_string(nv - 1) + ")");
+        in.fail("face " + std::to_string(f) + " names vertex \"" +
+                std::string(tokens[i].substr(0, 40)) + "\"; there are " + std::to_string(nv) +
+                " (0 to " + std::to_string(nv - 1) + ")");
     }
     for (size_t i = n + 1; i < tokens.size(); ++i)  // a face's colour may follow its indices
-      if (!parse_real(tokens[i])) in.fail("face " + std::to_string(f) + " has a trailing token that is not a number");
+      if (!parse_real(tokens[i]))
+        in.fail("face " + std::to_string(f) + " has a trailing token that is not a number");
   }
   while (in.line(tokens))
-    if (!tokens.empty()) in.fail("holds more than the " + std::to_string(nv) + " vertices and " +
-                                 std::to_string(nf) + " faces its header counts");
+    if (!tokens.empty())
+      in.fail("holds more than the " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
+              " faces its header counts");
 }
 
 }  // namespace scatter
@@ -160,8 +173,8 @@ namespace {
 
 size_t ply_type_size(std::string_view t) {
   static const std::pair<std::string_view, size_t> kTypes[] = {
-      {"char", 1},  {"uchar", 1},  {"int8", 1},  {"uint8", 1},  {"short", 2},   {"ushort", 2},
-      {"int16", 2}, {"uint16", 2}, {"int", 4},   {"uint", 4},   {"int32", 4},   {"uint32", 4},
+      {"char", 1},  {"uchar", 1},   {"int8", 1},   {"uint8", 1},  {"short", 2}, {"ushort", 2},
+      {"int16", 2}, {"uint16", 2},  {"int", 4},    {"uint", 4},   {"int32", 4}, {"uint32", 4},
       {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
   for (const auto& [name, size] : kTypes)
     if (t == name) return size;
@@ -188,7 +201,8 @@ struct PlyElement {
   std::vector<PlyProperty> properties;
 };
 
-// One row per line, blank lines apart: a number per scalar, a length and that many numbers per list.
+// One row per line, blank lines apart: a number per scalar, a length and that many numbers per
+// list.
 void check_ply_ascii(std::string_view body, const std::vector<PlyElement>& elements) {
   size_t at = 0, line_no = 0;
   for (size_t e = 0; e < elements.size(); ++e)
@@ -196,8 +210,9 @@ void check_ply_ascii(std::string_view body, const std::vector<PlyElement>& eleme
       std::vector<std::string_view> w;
       while (w.empty()) {
         if (at >= body.size())
-          throw std::runtime_error("PLY: element " + std::to_string(e) + " has " + std::to_string(row) +
-                                   " rows, its header says " + std::to_string(elements[e].count));
+          throw std::runtime_error("PLY: element " + std::to_string(e) + " has " +
+                                   std::to_string(row) + " rows, its header says " +
+                                   std::to_string(elements[e].count));
         size_t nl = std::min(body.find('\n', at), body.size());
         std::string_view line = body.substr(at, nl - at);
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
@@ -206,8 +221,9 @@ void check_ply_ascii(std::string_view body, const std::vector<PlyElement>& eleme
         ++line_no;
       }
       auto fail = [&] {
-        throw std::runtime_error("PLY data line " + std::to_string(line_no) + ": row " + std::to_string(row) +
-                                 " of element " + std::to_string(e) + " does not match the header's properties");
+        throw std::runtime_error("PLY data line " + std::to_string(line_no) + ": row " +
+                                 std::to_string(row) + " of element " + std::to_string(e) +
+                                 " does not match the header's properties");
       };
       size_t k = 0;
       for (const PlyProperty& p : elements[e].properties) {
@@ -220,15 +236,18 @@ void check_ply_ascii(std::string_view body, const std::vector<PlyElement>& eleme
     }
 }
 
-// Walks the rows: each list's length, read in the file's byte order, must leave the row inside the data.
-void check_ply_binary(std::string_view body, const std::vector<PlyElement>& elements, bool big_endian) {
+// Walks the rows: each list's length, read in the file's byte order, must leave the row inside the
+// data.
+void check_ply_binary(std::string_view body, const std::vector<PlyElement>& elements,
+                      bool big_endian) {
   size_t at = 0;
   for (size_t e = 0; e < elements.size(); ++e)
     for (unsigned long long row = 0; row < elements[e].count; ++row)
       for (const PlyProperty& p : elements[e].properties) {
         unsigned long long n = 1;
         if (p.count_size) {
-          if (body.size() - at < p.count_size) n = ~0ull;
+          if (body.size() - at < p.count_size)
+            n = ~0ull;
           else {
             n = 0;
             for (size_t b = 0; b < p.count_size; ++b) {
@@ -239,9 +258,9 @@ void check_ply_binary(std::string_view body, const std::vector<PlyElement>& elem
           }
         }
         if (n > (body.size() - at) / p.size)
-          throw std::runtime_error("PLY: the data ends inside row " + std::to_string(row) + " of element " +
-                                   std::to_string(e) + " (the header counts " + std::to_string(elements[e].count) +
-                                   " rows)");
+          throw std::runtime_error("PLY: the data ends inside row " + std::to_string(row) +
+                                   " of element " + std::to_string(e) + " (the header counts " +
+                                   std::to_string(elements[e].count) + " rows)");
         at += n * p.size;
       }
 }
@@ -252,11 +271,14 @@ void check_ply(std::string_view bytes) {
   constexpr size_t kMaxHeader = 64 << 10;
   size_t end = bytes.find("end_header");
   if (end == std::string_view::npos || end > kMaxHeader)
-    throw std::runtime_error("PLY: no end_header line in the first " + std::to_string(kMaxHeader) + " bytes");
+    throw std::runtime_error("PLY: no end_header line in the first " + std::to_string(kMaxHeader) +
+                             " bytes");
   size_t data = bytes.find('\n', end);
-  if (data == std::string_view::npos) throw std::runtime_error("PLY: end_header is the last line; there is no data");
+  if (data == std::string_view::npos)
+    throw std::runtime_error("PLY: end_header is the last line; there is no data");
   std::string_view header = bytes.substr(0, data + 1);
-  if (header.find('\0') != std::string_view::npos) throw std::runtime_error("PLY: the header holds a NUL byte");
+  if (header.find('\0') != std::string_view::npos)
+    throw std::runtime_error("PLY: the header holds a NUL byte");
   std::vector<PlyElement> elements;
   std::string format;
   size_t line_no = 0;
@@ -304,8 +326,10 @@ void check_ply(std::string_view bytes) {
   }
   if (elements.empty()) throw std::runtime_error("PLY: the header declares no elements");
   std::string_view body = bytes.substr(header.size());
-  if (format == "ascii") check_ply_ascii(body, elements);
-  else check_ply_binary(body, elements, format == "binary_big_endian");
+  if (format == "ascii")
+    check_ply_ascii(body, elements);
+  else
+    check_ply_binary(body, elements, format == "binary_big_endian");
 }
 
 }  // namespace scatter

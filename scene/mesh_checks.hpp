@@ -1,11 +1,11 @@
 // Checks of mesh files before assimp reads them, for the formats whose assimp readers trust what
 // a file says about itself.
 //
-// OFF (Object File Format: "OFF", counts, vertex lines, face lines). Assimp's OFF reader trusts the header: counts larger than the data leave faces with no
-// indices (an assertion inside assimp then aborts the process), an index past the vertices is
-// clamped to the last one, a face of more than 9 vertices is dropped, and a line of 4096 characters
-// or more overflows its line buffer. This check reads the file the way that reader does and
-// rejects each of those.
+// OFF (Object File Format: "OFF", counts, vertex lines, face lines). Assimp's OFF reader trusts the
+// header: counts larger than the data leave faces with no indices (an assertion inside assimp then
+// aborts the process), an index past the vertices is clamped to the last one, a face of more than 9
+// vertices is dropped, and a line of 4096 characters or more overflows its line buffer. This check
+// reads the file the way that reader does and rejects each of those.
 #pragma once
 
 #include <string_view>

@@ -1,12 +1,12 @@
 // load_mesh through assimp, confined to the file's own bytes (see mesh.hpp).
 #include <assimp/BaseImporter.h>
-#include <assimp/IOStream.hpp>
-#include <assimp/IOSystem.hpp>
 #include <assimp/importerdesc.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <algorithm>
+#include <assimp/IOStream.hpp>
+#include <assimp/IOSystem.hpp>
 #include <assimp/Importer.hpp>
 #include <cctype>
 #include <cmath>
@@ -54,11 +54,13 @@ class BytesStream : public Assimp::IOStream {
 // open /etc/passwd or block on a FIFO.
 class OneFileIOSystem : public Assimp::IOSystem {
  public:
-  OneFileIOSystem(std::string name, std::string_view bytes) : name_(std::move(name)), bytes_(bytes) {}
+  OneFileIOSystem(std::string name, std::string_view bytes)
+      : name_(std::move(name)), bytes_(bytes) {}
   bool Exists(const char* file) const override { return file && name_ == file; }
   char getOsSeparator() const override { return '/'; }
   Assimp::IOStream* Open(const char* file, const char* mode) override {
-    if (!Exists(file) || !mode || std::string_view(mode).find_first_of("wa+") != std::string_view::npos)
+    if (!Exists(file) || !mode ||
+        std::string_view(mode).find_first_of("wa+") != std::string_view::npos)
       return nullptr;
     return new BytesStream(bytes_);
   }
@@ -87,7 +89,8 @@ void keep_importers_of(Assimp::Importer& importer, const std::string& ext) {
     const aiImporterDesc* info = importer.GetImporterInfo(i);
     if (info && lists_extension(info->mFileExtensions, ext)) continue;
     Assimp::BaseImporter* loader = importer.GetImporter(i);
-    if (importer.UnregisterLoader(loader) == aiReturn_SUCCESS) delete loader;  // no longer the importer's
+    if (importer.UnregisterLoader(loader) == aiReturn_SUCCESS)
+      delete loader;  // no longer the importer's
   }
 }
 
@@ -97,26 +100,29 @@ void check_imported(const aiScene& scene, const std::string& name) {
   for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
     const aiMesh* am = scene.mMeshes[m];
     auto fail = [&](const std::string& problem) {
-      throw std::runtime_error("mesh " + name + " is malformed: mesh " + std::to_string(m) + " " + problem);
+      throw std::runtime_error("mesh " + name + " is malformed: mesh " + std::to_string(m) + " " +
+                               problem);
     };
     if (!am || (am->mNumVertices > 0 && !am->mVertices) || (am->mNumFaces > 0 && !am->mFaces))
       fail("lacks its vertex or face data");
     unsigned types = 0;
     for (unsigned f = 0; f < am->mNumFaces; ++f) {
       const aiFace& face = am->mFaces[f];
-      if (face.mNumIndices == 0 || !face.mIndices) fail("has a face (" + std::to_string(f) + ") with no vertices");
+      if (face.mNumIndices == 0 || !face.mIndices)
+        fail("has a face (" + std::to_string(f) + ") with no vertices");
       for (unsigned k = 0; k < face.mNumIndices; ++k)
         if (face.mIndices[k] >= am->mNumVertices)
-          fail("has a face (" + std::to_string(f) + ") naming vertex " + std::to_string(face.mIndices[k]) +
-               " of " + std::to_string(am->mNumVertices));
+          fail("has a face (" + std::to_string(f) + ") naming vertex " +
+               std::to_string(face.mIndices[k]) + " of " + std::to_string(am->mNumVertices));
       types |= face.mNumIndices == 1   ? aiPrimitiveType_POINT
                : face.mNumIndices == 2 ? aiPrimitiveType_LINE
                : face.mNumIndices == 3 ? aiPrimitiveType_TRIANGLE
                                        : aiPrimitiveType_POLYGON;
     }
-    constexpr unsigned kTypes = aiPrimitiveType_POINT | aiPrimitiveType_LINE | aiPrimitiveType_TRIANGLE |
-                                aiPrimitiveType_POLYGON;
-    if ((am->mPrimitiveTypes & kTypes) != types) fail("has faces that disagree with its primitive types");
+    constexpr unsigned kTypes = aiPrimitiveType_POINT | aiPrimitiveType_LINE |
+                                aiPrimitiveType_TRIANGLE | aiPrimitiveType_POLYGON;
+    if ((am->mPrimitiveTypes & kTypes) != types)
+      fail("has faces that disagree with its primitive types");
   }
 }
 
@@ -145,13 +151,17 @@ Mesh load_mesh(const std::filesystem::path& path, const MeshLimits& limits) {
 Mesh load_mesh_bytes(std::string_view bytes, std::string_view format, const std::string& name,
                      const MeshLimits& limits) {
   if (bytes.size() > limits.max_bytes)
-    throw std::runtime_error("mesh " + name + " is larger than " + std::to_string(limits.max_bytes) + " bytes");
+    throw std::runtime_error("mesh " + name + " is larger than " +
+                             std::to_string(limits.max_bytes) + " bytes");
   std::string ext(format);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   if (ext == "off" || ext == "ply") {
     try {
-      if (ext == "off") check_off_text(bytes);
-      else check_ply(bytes);
+      if (ext == "off")
+        check_off_text(bytes);
+      else
+        check_ply(bytes);
     } catch (const std::exception& e) {
       throw std::runtime_error("cannot import mesh " + name + ": " + e.what());
     }
@@ -159,12 +169,13 @@ Mesh load_mesh_bytes(std::string_view bytes, std::string_view format, const std:
   Assimp::Importer importer;
   keep_importers_of(importer, ext);
   if (importer.GetImporterCount() == 0)
-    throw std::runtime_error("cannot import mesh " + name + ": no importer reads ." + ext + " files");
+    throw std::runtime_error("cannot import mesh " + name + ": no importer reads ." + ext +
+                             " files");
   // The importer's own name for the file: the only one its IO system serves.
   const std::string file = "mesh." + ext;
   importer.SetIOHandler(new OneFileIOSystem(file, bytes));  // the importer owns it
-  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_NORMALS | aiComponent_COLORS |
-                                                          aiComponent_TEXCOORDS);
+  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS,
+                              aiComponent_NORMALS | aiComponent_COLORS | aiComponent_TEXCOORDS);
   // Read, then check what the importer made before any post-processing step sees it: Debian's
   // assimp is built with its assertions on, and a step that meets a malformed scene (a face with
   // no indices, primitive types that disagree with the faces) aborts the process.
@@ -173,9 +184,9 @@ Mesh load_mesh_bytes(std::string_view bytes, std::string_view format, const std:
     throw std::runtime_error("cannot import mesh " + name + ": " +
                              (raw ? "it holds no triangle mesh" : importer.GetErrorString()));
   check_imported(*raw, name);
-  const aiScene* scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                                      aiProcess_RemoveComponent | aiProcess_PreTransformVertices |
-                                                      aiProcess_SortByPType);
+  const aiScene* scene = importer.ApplyPostProcessing(
+      aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_RemoveComponent |
+      aiProcess_PreTransformVertices | aiProcess_SortByPType);
   if (!scene || scene->mNumMeshes == 0)
     throw std::runtime_error("cannot import mesh " + name + ": " +
                              (scene ? "it holds no triangle mesh" : importer.GetErrorString()));
@@ -184,8 +195,8 @@ Mesh load_mesh_bytes(std::string_view bytes, std::string_view format, const std:
     const aiMesh* am = scene->mMeshes[m];
     if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
     if (am->mNumFaces > limits.max_triangles - mesh.triangle_count())
-      throw std::runtime_error("mesh " + name + " has more than " + std::to_string(limits.max_triangles) +
-                               " triangles");
+      throw std::runtime_error("mesh " + name + " has more than " +
+                               std::to_string(limits.max_triangles) + " triangles");
     auto base = static_cast<uint32_t>(mesh.positions.size());
     for (unsigned i = 0; i < am->mNumVertices; ++i) {
       Vec3 p{am->mVertices[i].x, am->mVertices[i].y, am->mVertices[i].z};
@@ -200,8 +211,9 @@ Mesh load_mesh_bytes(std::string_view bytes, std::string_view format, const std:
       if (face.mNumIndices != 3) continue;
       for (int k = 0; k < 3; ++k) {
         if (face.mIndices[k] >= am->mNumVertices)
-          throw std::runtime_error("mesh " + name + ": face " + std::to_string(f) + " names vertex " +
-                                   std::to_string(face.mIndices[k]) + " of " + std::to_string(am->mNumVertices));
+          throw std::runtime_error("mesh " + name + ": face " + std::to_string(f) +
+                                   " names vertex " + std::to_string(face.mIndices[k]) + " of " +
+                                   std::to_string(am->mNumVertices));
         mesh.indices.push_back(base + face.mIndices[k]);
       }
     }

@@ -144,8 +144,8 @@ Scene parse_scene(const nlohmann::json& json, const std::filesystem::path& base_
 std::vector<Light> parse_lights(const nlohmann::json& lights, const std::string& path,
                                 const SceneLimits& limits) {
   if (!lights.is_array() || lights.size() > static_cast<size_t>(limits.max_lights))
-    throw ValidationError(path, "must be an array of at most " + std::to_string(limits.max_lights) +
-                                    " lights");
+    throw ValidationError(
+        path, "must be an array of at most " + std::to_string(limits.max_lights) + " lights");
   std::vector<Light> out;
   for (size_t i = 0; i < lights.size(); ++i)
     out.push_back(parse_light(JsonObject(lights[i], path + "[" + std::to_string(i) + "]")));

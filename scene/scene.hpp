@@ -28,9 +28,9 @@ struct Light {
   Vec3 position{3, 3, 3};
   Vec3 direction{0, -1, 0};  // the way the light travels (directional, spot)
   Vec3 color{1, 1, 1};
-  double intensity = 10;    // point, spot: radiant intensity; directional: irradiance
-  double inner_deg = 20;    // spot: full intensity inside this half-angle
-  double outer_deg = 30;    // spot: zero outside this half-angle
+  double intensity = 10;  // point, spot: radiant intensity; directional: irradiance
+  double inner_deg = 20;  // spot: full intensity inside this half-angle
+  double outer_deg = 30;  // spot: zero outside this half-angle
 };
 
 struct Camera {
@@ -47,7 +47,8 @@ struct Camera {
 struct CameraFrame {
   Vec3 forward, right, up;
   Vec3 ray(int i, int j, int width, int height) const {
-    return normalize(forward + right * (2 * (i + 0.5) / width - 1) + up * (1 - 2 * (j + 0.5) / height));
+    return normalize(forward + right * (2 * (i + 0.5) / width - 1) +
+                     up * (1 - 2 * (j + 0.5) / height));
   }
 };
 CameraFrame camera_frame(const Camera& camera, int width, int height);

@@ -114,8 +114,12 @@ bool Shape::inside(const Vec3& p) const {
 Aabb Shape::bounds() const {
   Vec3 h;
   switch (kind) {
-    case Kind::Sphere: h = {radius, radius, radius}; break;
-    case Kind::Box: h = size * 0.5; break;
+    case Kind::Sphere:
+      h = {radius, radius, radius};
+      break;
+    case Kind::Box:
+      h = size * 0.5;
+      break;
     case Kind::Torus: {
       double r = major_radius + minor_radius;
       h = {r, r, r};
@@ -130,18 +134,24 @@ Aabb Shape::bounds() const {
 
 double Shape::volume() const {
   switch (kind) {
-    case Kind::Sphere: return 4.0 / 3.0 * kPi * radius * radius * radius;
-    case Kind::Box: return size.x * size.y * size.z;
-    case Kind::Torus: return 2 * kPi * kPi * major_radius * minor_radius * minor_radius;
+    case Kind::Sphere:
+      return 4.0 / 3.0 * kPi * radius * radius * radius;
+    case Kind::Box:
+      return size.x * size.y * size.z;
+    case Kind::Torus:
+      return 2 * kPi * kPi * major_radius * minor_radius * minor_radius;
   }
   return 0;
 }
 
 Mesh Shape::tessellate(int detail) const {
   switch (kind) {
-    case Kind::Sphere: return sphere_mesh(*this, detail);
-    case Kind::Box: return box_mesh(*this);
-    case Kind::Torus: return torus_mesh(*this, detail);
+    case Kind::Sphere:
+      return sphere_mesh(*this, detail);
+    case Kind::Box:
+      return box_mesh(*this);
+    case Kind::Torus:
+      return torus_mesh(*this, detail);
   }
   return {};
 }

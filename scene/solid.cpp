@@ -80,7 +80,9 @@ class MeshSolid : public Solid {
     out.push_back((w0 * a.z + w1 * b.z + w2 * c.z) / sum);
   }
 
-  static bool before(const Vec3& p, const Vec3& q) { return p.x < q.x || (p.x == q.x && p.y < q.y); }
+  static bool before(const Vec3& p, const Vec3& q) {
+    return p.x < q.x || (p.x == q.x && p.y < q.y);
+  }
 
   // Which side of the directed edge p -> q the point (x, y) lies on; antisymmetric bit for bit.
   static double edge(const Vec3& p, const Vec3& q, double x, double y) {
@@ -104,7 +106,9 @@ class MeshSolid : public Solid {
 
 }  // namespace
 
-std::unique_ptr<Solid> make_mesh_solid(const Mesh& mesh) { return std::make_unique<MeshSolid>(mesh); }
+std::unique_ptr<Solid> make_mesh_solid(const Mesh& mesh) {
+  return std::make_unique<MeshSolid>(mesh);
+}
 std::unique_ptr<Solid> make_shape_solid(const Shape& shape) {
   return std::make_unique<ShapeSolid>(shape);
 }

@@ -51,9 +51,10 @@ VoxelGrid voxelize(const Scene& scene, const VoxelizeOptions& options) {
   Vec3 size = b.size();
   VoxelGrid g;
   g.voxel = std::max({size.x, size.y, size.z}) / options.resolution;
-  if (!(g.voxel > 0) || !std::isfinite(g.voxel) || options.resolution < 1 || options.resolution > 4096 ||
-      options.margin < 0 || options.margin > 64)
-    throw std::invalid_argument("cannot voxelize: the solid has no extent or the resolution is invalid");
+  if (!(g.voxel > 0) || !std::isfinite(g.voxel) || options.resolution < 1 ||
+      options.resolution > 4096 || options.margin < 0 || options.margin > 64)
+    throw std::invalid_argument(
+        "cannot voxelize: the solid has no extent or the resolution is invalid");
   g.nx = static_cast<int>(std::ceil(size.x / g.voxel)) + 2 * options.margin;
   g.ny = static_cast<int>(std::ceil(size.y / g.voxel)) + 2 * options.margin;
   g.nz = static_cast<int>(std::ceil(size.z / g.voxel)) + 2 * options.margin;
@@ -63,8 +64,8 @@ VoxelGrid voxelize(const Scene& scene, const VoxelizeOptions& options) {
   g.sigma_a.assign(3 * n, 0.f);
   g.occupancy.assign(n, 0.f);
   g.inside.assign(n, 0);
-  int threads = options.threads > 0 ? options.threads
-                                    : std::max(1u, std::thread::hardware_concurrency());
+  int threads =
+      options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
 
   // Pass 1: classify every voxel centre, one column per (i, j).
   std::vector<char> cls(n, kOutside);
@@ -76,8 +77,7 @@ VoxelGrid voxelize(const Scene& scene, const VoxelizeOptions& options) {
       Vec3 c = g.center(i, j, 0);
       solid->classify_column(c.x, c.y, zs, in);
       for (int k = 0; k < g.nz; ++k)
-        if (in[k])
-          cls[g.index(i, j, k)] = field.blocked(g.center(i, j, k)) ? kBlocked : kMedium;
+        if (in[k]) cls[g.index(i, j, k)] = field.blocked(g.center(i, j, k)) ? kBlocked : kMedium;
     }
   });
 

@@ -10,11 +10,12 @@ namespace scatter {
 
 struct VoxelGrid {
   int nx = 0, ny = 0, nz = 0;
-  Vec3 origin;        // world position of the corner of voxel (0, 0, 0)
-  double voxel = 0;   // edge length of a (cubic) voxel
-  std::vector<float> sigma_s;   // 3 per voxel (RGB), per scene unit
-  std::vector<float> sigma_a;   // 3 per voxel (RGB), per scene unit
-  std::vector<float> occupancy; // fraction of the voxel inside the mesh, supersampled at boundaries
+  Vec3 origin;                 // world position of the corner of voxel (0, 0, 0)
+  double voxel = 0;            // edge length of a (cubic) voxel
+  std::vector<float> sigma_s;  // 3 per voxel (RGB), per scene unit
+  std::vector<float> sigma_a;  // 3 per voxel (RGB), per scene unit
+  std::vector<float>
+      occupancy;                // fraction of the voxel inside the mesh, supersampled at boundaries
   std::vector<uint8_t> inside;  // voxel centre inside the mesh
 
   size_t count() const { return size_t(nx) * ny * nz; }

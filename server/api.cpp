@@ -31,7 +31,8 @@ const nlohmann::json& pipelines_json() {
 
 // Inline scenes may only name files inside the scenes folder: no absolute paths, no "..".
 void check_file_fields(const nlohmann::json& j, const std::string& path, int depth = 0) {
-  if (depth > kMaxJsonDepth) throw ValidationError(path, "nests deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+  if (depth > kMaxJsonDepth)
+    throw ValidationError(path, "nests deeper than " + std::to_string(kMaxJsonDepth) + " levels");
   if (j.is_object()) {
     for (const auto& [key, value] : j.items()) {
       std::string p = path + "." + key;
@@ -40,13 +41,15 @@ void check_file_fields(const nlohmann::json& j, const std::string& path, int dep
         bool escapes = f.is_absolute();
         for (const auto& part : f) escapes = escapes || part == "..";
         if (escapes)
-          throw ValidationError(p, "must be a path inside the server's scene folder (no absolute "
-                                   "paths, no \"..\")");
+          throw ValidationError(p,
+                                "must be a path inside the server's scene folder (no absolute "
+                                "paths, no \"..\")");
       }
       check_file_fields(value, p, depth + 1);
     }
   } else if (j.is_array()) {
-    for (size_t i = 0; i < j.size(); ++i) check_file_fields(j[i], path + "[" + std::to_string(i) + "]", depth + 1);
+    for (size_t i = 0; i < j.size(); ++i)
+      check_file_fields(j[i], path + "[" + std::to_string(i) + "]", depth + 1);
   }
 }
 
@@ -72,27 +75,32 @@ std::optional<std::string> percent_decode(std::string_view s) {
 // Compares without an early exit, so that the time taken does not tell how much of a guess matched.
 bool same_secret(std::string_view a, std::string_view b) {
   unsigned char diff = a.size() == b.size() ? 0 : 1;
-  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ (i < b.size() ? b[i] : 0));
+  for (size_t i = 0; i < a.size(); ++i)
+    diff |= static_cast<unsigned char>(a[i] ^ (i < b.size() ? b[i] : 0));
   return diff == 0;
 }
 
 // A message for the client: the server's own folders are not its business.
 std::string without_paths(std::string m, const ApiOptions& o) {
-  for (const auto& [dir, name] : {std::pair{o.assets_dir, std::string("asset ")}, std::pair{o.scenes_dir, std::string()}}) {
+  for (const auto& [dir, name] :
+       {std::pair{o.assets_dir, std::string("asset ")}, std::pair{o.scenes_dir, std::string()}}) {
     if (dir.empty()) continue;
     for (std::string prefix : {dir.string() + "/", dir.string()})
-      for (size_t at; !prefix.empty() && (at = m.find(prefix)) != std::string::npos;) m.replace(at, prefix.size(), name);
+      for (size_t at; !prefix.empty() && (at = m.find(prefix)) != std::string::npos;)
+        m.replace(at, prefix.size(), name);
   }
   return m;
 }
 
 std::string busy_message(const RenderQueue& q) {
-  return "the render queue is full (" + std::to_string(q.max_depth()) + " jobs waiting); try again shortly";
+  return "the render queue is full (" + std::to_string(q.max_depth()) +
+         " jobs waiting); try again shortly";
 }
 
 }  // namespace
 
-Api::Api(ApiOptions options, RenderQueue& queue, Metrics& metrics, RenderQueue* bakes, Offload offload)
+Api::Api(ApiOptions options, RenderQueue& queue, Metrics& metrics, RenderQueue* bakes,
+         Offload offload)
     : options_(std::move(options)),
       queue_(queue),
       bake_queue_(bakes ? *bakes : queue),
@@ -112,10 +120,13 @@ HttpResponse Api::error(int status, const std::string& message, const std::strin
 void Api::handle(const HttpRequest& request, Respond respond) {
   auto route_name = std::make_shared<std::string>("other");
   auto start = std::chrono::steady_clock::now();
-  Respond once = [this, route_name, start, method = request.method, respond = std::move(respond)](HttpResponse r) {
+  Respond once = [this, route_name, start, method = request.method,
+                  respond = std::move(respond)](HttpResponse r) {
     metrics_.count_request(*route_name, r.status);
-    spdlog::info("event=request method={} route={} status={} ms={:.1f}", method, *route_name, r.status,
-                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    spdlog::info("event=request method={} route={} status={} ms={:.1f}", method, *route_name,
+                 r.status,
+                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                     .count());
     respond(std::move(r));
   };
   // route() answers through `once`, or throws before it has: the error is the answer.
@@ -146,9 +157,9 @@ HttpResponse Api::handle(const HttpRequest& request) {
 bool Api::quick(const HttpRequest& request) {
   std::string path = request.target.substr(0, request.target.find('?'));
   if (request.method == "GET")
-    return path == "/api/health" || path == "/api/pipelines" || path == "/metrics" || path == "/api/assets" ||
-           path == "/api/bakes" || path.rfind("/api/bakes/", 0) == 0 || path == "/" || path == "/index.html" ||
-           path == "/app.js" || path == "/style.css";
+    return path == "/api/health" || path == "/api/pipelines" || path == "/metrics" ||
+           path == "/api/assets" || path == "/api/bakes" || path.rfind("/api/bakes/", 0) == 0 ||
+           path == "/" || path == "/index.html" || path == "/app.js" || path == "/style.css";
   return request.method == "DELETE" && path.rfind("/api/bakes/", 0) == 0;
 }
 
@@ -158,9 +169,11 @@ void Api::route(const HttpRequest& request, std::string& route_name, const Respo
     route_name = "unauthorized";
     return respond(error(401, "this server needs a token: send \"Authorization: Bearer TOKEN\""));
   }
-  static const std::map<std::string, std::string> kMethods = {
-      {"/api/health", "GET"}, {"/api/pipelines", "GET"}, {"/api/devices", "GET"},
-      {"/api/render", "POST"}, {"/metrics", "GET"}};
+  static const std::map<std::string, std::string> kMethods = {{"/api/health", "GET"},
+                                                              {"/api/pipelines", "GET"},
+                                                              {"/api/devices", "GET"},
+                                                              {"/api/render", "POST"},
+                                                              {"/metrics", "GET"}};
   if (path == "/api/assets") {
     route_name = path;
     return respond(assets(request));
@@ -173,7 +186,8 @@ void Api::route(const HttpRequest& request, std::string& route_name, const Respo
   if (it != kMethods.end()) {
     route_name = path;
     if (request.method != it->second)
-      return respond(error(405, request.method + " is not allowed on " + path + ": use " + it->second));
+      return respond(
+          error(405, request.method + " is not allowed on " + path + ": use " + it->second));
     if (path == "/api/health") return respond(health());
     if (path == "/api/pipelines") return respond(json_response(pipelines_json()));
     if (path == "/api/devices") return devices(respond);
@@ -195,26 +209,37 @@ void Api::route(const HttpRequest& request, std::string& route_name, const Respo
 }
 
 HttpResponse Api::metrics_text() {
-  std::string text = metrics_.text(queue_.depth()) +
-                     "# HELP scatter_sessions Live WebSocket sessions.\n# TYPE scatter_sessions gauge\n"
-                     "scatter_sessions " + std::to_string(sessions_.load()) + "\n";
+  std::string text =
+      metrics_.text(queue_.depth()) +
+      "# HELP scatter_sessions Live WebSocket sessions.\n# TYPE scatter_sessions gauge\n"
+      "scatter_sessions " +
+      std::to_string(sessions_.load()) + "\n";
   text += "# HELP scatter_bakes Bake jobs by state.\n# TYPE scatter_bakes gauge\n";
   auto counts = bakes_.counts();
   for (const char* state : {"queued", "running", "done", "failed", "cancelled"})
-    text += std::string("scatter_bakes{state=\"") + state + "\"} " + std::to_string(counts[state]) + "\n";
+    text += std::string("scatter_bakes{state=\"") + state + "\"} " + std::to_string(counts[state]) +
+            "\n";
   if (BakeCache* cache = queue_.cache()) {
     CacheStats c = cache->stats();
-    text += "# HELP scatter_bake_cache_lookups_total Bake cache lookups by outcome.\n"
-            "# TYPE scatter_bake_cache_lookups_total counter\n";
-    text += "scatter_bake_cache_lookups_total{result=\"memory_hit\"} " + std::to_string(c.memory_hits) + "\n";
-    text += "scatter_bake_cache_lookups_total{result=\"disk_hit\"} " + std::to_string(c.disk_hits) + "\n";
+    text +=
+        "# HELP scatter_bake_cache_lookups_total Bake cache lookups by outcome.\n"
+        "# TYPE scatter_bake_cache_lookups_total counter\n";
+    text += "scatter_bake_cache_lookups_total{result=\"memory_hit\"} " +
+            std::to_string(c.memory_hits) + "\n";
+    text += "scatter_bake_cache_lookups_total{result=\"disk_hit\"} " + std::to_string(c.disk_hits) +
+            "\n";
     text += "scatter_bake_cache_lookups_total{result=\"miss\"} " + std::to_string(c.misses) + "\n";
-    text += "scatter_bake_cache_lookups_total{result=\"corrupt\"} " + std::to_string(c.corrupt) + "\n";
+    text +=
+        "scatter_bake_cache_lookups_total{result=\"corrupt\"} " + std::to_string(c.corrupt) + "\n";
   }
   SceneLibrary::Stats l = scenes_.stats();
-  text += "# HELP scatter_scene_library_scenes Parsed scenes kept for reuse.\n# TYPE scatter_scene_library_scenes gauge\n";
+  text +=
+      "# HELP scatter_scene_library_scenes Parsed scenes kept for reuse.\n# TYPE "
+      "scatter_scene_library_scenes gauge\n";
   text += "scatter_scene_library_scenes " + std::to_string(l.scenes) + "\n";
-  text += "# HELP scatter_scene_loads_total Scenes parsed (library misses).\n# TYPE scatter_scene_loads_total counter\n";
+  text +=
+      "# HELP scatter_scene_loads_total Scenes parsed (library misses).\n# TYPE "
+      "scatter_scene_loads_total counter\n";
   text += "scatter_scene_loads_total " + std::to_string(l.loads) + "\n";
   return {200, "text/plain; version=0.0.4", text, {}};
 }
@@ -226,7 +251,9 @@ bool Api::acquire_session() {
   return false;
 }
 
-void Api::release_session() { --sessions_; }
+void Api::release_session() {
+  --sessions_;
+}
 
 std::map<std::string, std::string> parse_query(std::string_view target) {
   std::map<std::string, std::string> q;
@@ -245,14 +272,16 @@ std::map<std::string, std::string> parse_query(std::string_view target) {
 }
 
 bool Api::authorized(const HttpRequest& request) const {
-  if (options_.token.empty() || same_secret(request.authorization, "Bearer " + options_.token)) return true;
+  if (options_.token.empty() || same_secret(request.authorization, "Bearer " + options_.token))
+    return true;
   auto q = parse_query(request.target);
   auto token = q.find("token");
   return token != q.end() && same_secret(token->second, options_.token);
 }
 
 HttpResponse Api::health() {
-  double uptime = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+  double uptime =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
   return json_response({{"status", "ok"},
                         {"version", "0.1.0"},
                         {"uptime_s", uptime},
@@ -265,13 +294,18 @@ HttpResponse Api::health() {
 
 void Api::devices(const Respond& respond) {
   RenderQueue::Job job;
-  job.dropped = [respond](const std::string& why) { respond(error(503, "devices not listed: " + why)); };
+  job.dropped = [respond](const std::string& why) {
+    respond(error(503, "devices not listed: " + why));
+  };
   job.run = [respond](RenderQueue::Context& c) {
     nlohmann::json cl = nlohmann::json::array();
     for (const auto& d : gpu::list_cl_devices())
       cl.push_back({{"id", std::to_string(d.platform) + ":" + std::to_string(d.device)},
-                    {"name", d.name}, {"version", d.version}, {"type", d.type},
-                    {"global_memory", d.global_memory}, {"fp64", d.fp64}});
+                    {"name", d.name},
+                    {"version", d.version},
+                    {"type", d.type},
+                    {"global_memory", d.global_memory},
+                    {"fp64", d.fp64}});
     nlohmann::json gl;
     try {
       gl = {{"renderer", c.gpu.gl().renderer()}, {"version", c.gpu.gl().version()}};
@@ -301,16 +335,20 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
   limits.max_image = options.max_image;
   if (r.has("scene_name")) {
     std::string name = r.string("scene_name", std::nullopt);
-    if (name.empty() || name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_") != std::string::npos)
-      throw ValidationError("scene_name", "must be the name of a shipped scene (letters, digits, - and _)");
+    if (name.empty() ||
+        name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_") != std::string::npos)
+      throw ValidationError("scene_name",
+                            "must be the name of a shipped scene (letters, digits, - and _)");
     auto file = options.scenes_dir / (name + ".json");
-    if (!std::filesystem::exists(file)) throw ValidationError("scene_name", "no scene named \"" + name + "\"");
+    if (!std::filesystem::exists(file))
+      throw ValidationError("scene_name", "no scene named \"" + name + "\"");
     try {
       spec.scene = library.load(file, limits, &spec.scene_load_ms);
     } catch (const ValidationError&) {
       throw;
     } catch (const std::exception& e) {  // a shipped scene that cannot load: the server's problem
-      throw std::runtime_error("scene " + name + " cannot be loaded: " + without_paths(e.what(), options));
+      throw std::runtime_error("scene " + name +
+                               " cannot be loaded: " + without_paths(e.what(), options));
     }
   } else {
     check_file_fields(request["scene"], "scene");
@@ -320,8 +358,12 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
     try {
       spec.scene = library.parse(scene, options.scenes_dir, limits, &spec.scene_load_ms);
     } catch (const ValidationError& e) {
-      throw ValidationError(e.field(), without_paths(std::string(e.what()).substr(e.field().empty() ? 0 : e.field().size() + 2), options));
-    } catch (const std::exception& e) {  // files it names that cannot be read: the request's problem
+      throw ValidationError(
+          e.field(),
+          without_paths(std::string(e.what()).substr(e.field().empty() ? 0 : e.field().size() + 2),
+                        options));
+    } catch (
+        const std::exception& e) {  // files it names that cannot be read: the request's problem
       throw ValidationError("scene", without_paths(e.what(), options));
     }
   }
@@ -329,7 +371,8 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
   return spec;
 }
 
-void Api::check_pipeline(const std::string& pipeline, const std::string& terms, const Settings& settings) {
+void Api::check_pipeline(const std::string& pipeline, const std::string& terms,
+                         const Settings& settings) {
   const PipelineInfo& info = pipeline_info(pipeline);  // names the known ones when unknown
   if (!terms.empty()) require_terms(info, parse_terms(terms));
   info.validate(settings);
@@ -349,28 +392,35 @@ void Api::render(const HttpRequest& http, const Respond& respond) {
   frame.scene_load_ms = spec.scene_load_ms;
   frame.max_seconds = options_.max_render_s;
   auto cancel = http.cancel ? http.cancel : std::make_shared<CancelToken>();
-  bool queued = post_render(queue_, metrics_, std::move(frame), cancel,
-                            [this, respond, format = spec.format, exposure = spec.exposure](RenderOutcome o) {
-    if (!o.result) return respond(error(o.status, without_paths(o.error, options_), o.field));
-    // Encoded off the render thread.
-    offload_([o = std::move(o), respond, format, exposure]() mutable {
-      RenderResult& result = *o.result;
-      nlohmann::json timings = nlohmann::json::object();
-      for (const auto& t : result.timings) timings[t.stage] = t.ms;
-      nlohmann::json plan = result.plan;
-      if (format == "json")
-        return respond(json_response({{"pipeline", result.plan.pipeline}, {"plan", plan}, {"timings_ms", timings},
-                                      {"queue_wait_ms", o.wait_ms}, {"width", result.image.width},
-                                      {"height", result.image.height}}));
-      HttpResponse response{200, format == "exr" ? "image/x-exr" : (format == "png" ? "image/png" : "image/jpeg"),
-                            encode_image(result.image, format, ToneMap{exposure}), {}};
-      response.headers = {{"X-Scatter-Pipeline", result.plan.pipeline},
-                          {"X-Scatter-Plan", plan.dump()},
-                          {"X-Scatter-Timings", timings.dump()},
-                          {"X-Scatter-Queue-Wait-Ms", short_number(o.wait_ms)}};
-      respond(std::move(response));
-    });
-  });
+  bool queued = post_render(
+      queue_, metrics_, std::move(frame), cancel,
+      [this, respond, format = spec.format, exposure = spec.exposure](RenderOutcome o) {
+        if (!o.result) return respond(error(o.status, without_paths(o.error, options_), o.field));
+        // Encoded off the render thread.
+        offload_([o = std::move(o), respond, format, exposure]() mutable {
+          RenderResult& result = *o.result;
+          nlohmann::json timings = nlohmann::json::object();
+          for (const auto& t : result.timings) timings[t.stage] = t.ms;
+          nlohmann::json plan = result.plan;
+          if (format == "json")
+            return respond(json_response({{"pipeline", result.plan.pipeline},
+                                          {"plan", plan},
+                                          {"timings_ms", timings},
+                                          {"queue_wait_ms", o.wait_ms},
+                                          {"width", result.image.width},
+                                          {"height", result.image.height}}));
+          HttpResponse response{
+              200,
+              format == "exr" ? "image/x-exr" : (format == "png" ? "image/png" : "image/jpeg"),
+              encode_image(result.image, format, ToneMap{exposure}),
+              {}};
+          response.headers = {{"X-Scatter-Pipeline", result.plan.pipeline},
+                              {"X-Scatter-Plan", plan.dump()},
+                              {"X-Scatter-Timings", timings.dump()},
+                              {"X-Scatter-Queue-Wait-Ms", short_number(o.wait_ms)}};
+          respond(std::move(response));
+        });
+      });
   if (!queued) respond(error(503, busy_message(queue_)));
 }
 

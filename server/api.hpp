@@ -9,11 +9,12 @@
 //                         "settings": {"spp": 64}, "exposure": 1}
 //   POST   /api/assets?kind=mesh&format=obj|ply|stl|glb|off   the file as the body
 //   POST   /api/assets?kind=grid&dims=X,Y,Z&bounds=x0,y0,z0,x1,y1,z1   raw float32, x fastest
-//                           201 {"id" (SHA-256 of the content), "kind", "bytes", ...}; 200 if known;
-//                           scenes then name it: "mesh": {"asset": ID}, density {"type": "grid",
-//                           "asset": ID}
+//                           201 {"id" (SHA-256 of the content), "kind", "bytes", ...}; 200 if
+//                           known; scenes then name it: "mesh": {"asset": ID}, density {"type":
+//                           "grid", "asset": ID}
 //   GET    /api/assets      {"assets": [{"id", "kind", "bytes", ...}]}
-//   POST   /api/bakes       {"scene": {...} | "scene_name", "pipeline": "single", "settings": {...}}
+//   POST   /api/bakes       {"scene": {...} | "scene_name", "pipeline": "single", "settings":
+//   {...}}
 //                           202 and the job's status (a new job), or 200 and the existing job's
 //   GET    /api/bakes       {"bakes": [status, ...]}
 //   GET    /api/bakes/{id}  {"id", "state", "stage", "progress" 0-1, "timings_ms", "error", ...}
@@ -49,9 +50,9 @@ struct ApiOptions {
   int max_sessions = 16;                // live WebSocket sessions at once
   int idle_refine_ms = 200;             // a still view is re-rendered at full size after this
   double session_idle_s = 120;          // a live session that sends nothing for this long is closed
-  double max_request_mb = 2048;         // estimated host + device memory one render or bake may take
-  double max_render_s = 120;            // estimated (and enforced) seconds one render may take
-  std::filesystem::path assets_dir;     // uploaded assets; empty: uploads are refused (503)
+  double max_request_mb = 2048;      // estimated host + device memory one render or bake may take
+  double max_render_s = 120;         // estimated (and enforced) seconds one render may take
+  std::filesystem::path assets_dir;  // uploaded assets; empty: uploads are refused (503)
 };
 
 struct HttpRequest {
@@ -91,7 +92,8 @@ class Api {
   // percent-decoded, for WebSocket clients, which cannot set headers); true when no token is set.
   bool authorized(const HttpRequest& request) const;
 
-  // Takes a live-session slot; false when --max-sessions are in use. release_session() gives it back.
+  // Takes a live-session slot; false when --max-sessions are in use. release_session() gives it
+  // back.
   bool acquire_session();
   void release_session();
   int sessions() const { return sessions_; }
@@ -116,11 +118,12 @@ class Api {
   // Reads the fields of `r` (an object over `json`): scene or scene_name, pipeline, terms, format,
   // settings, exposure. Leaves other fields for the caller; throws ValidationError. An inline
   // scene's "asset" fields become the uploaded files' paths; shipped scenes come from `library`.
-  static RenderSpec read_render_spec(JsonObject& r, const nlohmann::json& json, const ApiOptions& options,
-                                     SceneLibrary& library);
+  static RenderSpec read_render_spec(JsonObject& r, const nlohmann::json& json,
+                                     const ApiOptions& options, SceneLibrary& library);
   // Throws ValidationError for an unknown pipeline, terms it cannot render (unless `terms` is
   // empty) or a setting it rejects, from the registry alone: no instance, no GPU.
-  static void check_pipeline(const std::string& pipeline, const std::string& terms, const Settings& settings);
+  static void check_pipeline(const std::string& pipeline, const std::string& terms,
+                             const Settings& settings);
   // Throws RequestTooCostly (413) when rendering (or baking) `scene` as asked is estimated past
   // --max-request-mb or --max-render-s; the message names the field and the limit.
   static void check_cost(const ApiOptions& options, const std::string& pipeline, const Scene& scene,

@@ -1,12 +1,12 @@
 // POST/GET /api/assets: uploads checked and stored under their content id, and the lookup that
 // lets a scene name them.
+#include <unistd.h>
+
 #include <atomic>
 #include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
-
-#include <unistd.h>
 
 #include "bake/cache.hpp"
 #include "protocol/json_reader.hpp"
@@ -18,7 +18,9 @@
 namespace scatter::server {
 namespace {
 
-bool is_asset_id(const std::string& s) { return is_bake_key(s); }
+bool is_asset_id(const std::string& s) {
+  return is_bake_key(s);
+}
 
 std::vector<double> numbers(const std::string& text, size_t count, const std::string& field) {
   std::vector<double> v;
@@ -33,7 +35,8 @@ std::vector<double> numbers(const std::string& text, size_t count, const std::st
       throw ValidationError(field, "\"" + item + "\" is not a number");
     }
   }
-  if (v.size() != count) throw ValidationError(field, "needs " + std::to_string(count) + " comma-separated numbers");
+  if (v.size() != count)
+    throw ValidationError(field, "needs " + std::to_string(count) + " comma-separated numbers");
   return v;
 }
 
@@ -56,10 +59,10 @@ void resolve_assets(nlohmann::json& j, const std::string& path, const std::files
     }
     for (auto& [key, value] : j.items()) resolve_assets(value, path + "." + key, dir);
   } else if (j.is_array()) {
-    for (size_t i = 0; i < j.size(); ++i) resolve_assets(j[i], path + "[" + std::to_string(i) + "]", dir);
+    for (size_t i = 0; i < j.size(); ++i)
+      resolve_assets(j[i], path + "[" + std::to_string(i) + "]", dir);
   }
 }
-
 
 HttpResponse Api::assets(const HttpRequest& request) {
   const auto& dir = options_.assets_dir;
@@ -79,13 +82,16 @@ HttpResponse Api::assets(const HttpRequest& request) {
     if (!dir.empty())
       for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
         std::string name = e.path().filename().string();
-        if (name.size() < 65 || !is_asset_id(name.substr(0, 64)) || name.find(".tmp") != std::string::npos) continue;
+        if (name.size() < 65 || !is_asset_id(name.substr(0, 64)) ||
+            name.find(".tmp") != std::string::npos)
+          continue;
         if (name.substr(64) == ".raw") continue;  // a grid's data, listed with its header
         list.push_back(describe(e.path()));
       }
     return json_response({{"assets", list}});
   }
-  if (request.method != "POST") return error(405, request.method + " is not allowed on /api/assets: use POST or GET");
+  if (request.method != "POST")
+    return error(405, request.method + " is not allowed on /api/assets: use POST or GET");
   if (dir.empty()) return error(503, "this server keeps no assets (start it with a --cache-dir)");
   auto q = parse_query(request.target);
   std::string kind = q.count("kind") ? q["kind"] : "mesh";
@@ -98,7 +104,8 @@ HttpResponse Api::assets(const HttpRequest& request) {
   // Messages name "the upload", not the server's files.
   auto plain = [&](std::string m, const std::filesystem::path& p) {
     for (const std::string& s : {p.string(), p.filename().string()})
-      for (size_t at; !s.empty() && (at = m.find(s)) != std::string::npos;) m.replace(at, s.size(), "the upload");
+      for (size_t at; !s.empty() && (at = m.find(s)) != std::string::npos;)
+        m.replace(at, s.size(), "the upload");
     return m;
   };
   auto write = [&](const std::filesystem::path& p, const std::string& bytes) {
@@ -110,7 +117,8 @@ HttpResponse Api::assets(const HttpRequest& request) {
   if (kind == "mesh") {
     std::string format = q.count("format") ? q["format"] : "";
     static const std::set<std::string> kFormats = {"obj", "ply", "stl", "glb", "off"};
-    if (!kFormats.count(format)) throw ValidationError("format", "must be one of obj, ply, stl, glb, off");
+    if (!kFormats.count(format))
+      throw ValidationError("format", "must be one of obj, ply, stl, glb, off");
     const std::string id = sha256_hex(request.body);
     auto final_path = dir / (id + "." + format);
     if (std::filesystem::exists(final_path)) return json_response(describe(final_path), 200);
@@ -119,9 +127,11 @@ HttpResponse Api::assets(const HttpRequest& request) {
     try {
       Mesh mesh = load_mesh(tmp_path);
       WatertightReport w = check_watertight(mesh);
-      if (!w.watertight()) throw ValidationError("body", "the mesh is not watertight (" + w.summary() + ")");
+      if (!w.watertight())
+        throw ValidationError("body", "the mesh is not watertight (" + w.summary() + ")");
       Vec3 size = mesh.bounds().size();
-      if (!(std::abs(mesh.volume()) > 1e-9 * size.x * size.y * size.z) || std::max({size.x, size.y, size.z}) <= 0)
+      if (!(std::abs(mesh.volume()) > 1e-9 * size.x * size.y * size.z) ||
+          std::max({size.x, size.y, size.z}) <= 0)
         throw ValidationError("body", "the mesh encloses no volume");
       info = {{"triangles", mesh.triangle_count()}};
     } catch (const ValidationError&) {
@@ -129,7 +139,8 @@ HttpResponse Api::assets(const HttpRequest& request) {
       throw;
     } catch (const std::exception& e) {
       std::filesystem::remove(tmp_path);
-      throw ValidationError("body", "is not a readable " + format + " mesh: " + plain(e.what(), tmp_path));
+      throw ValidationError("body",
+                            "is not a readable " + format + " mesh: " + plain(e.what(), tmp_path));
     }
     std::filesystem::rename(tmp_path, final_path);
     nlohmann::json j = describe(final_path);
@@ -137,13 +148,17 @@ HttpResponse Api::assets(const HttpRequest& request) {
     return json_response(j, 201);
   }
   if (!q.count("dims")) throw ValidationError("dims", "is required for a grid: nx,ny,nz");
-  if (!q.count("bounds")) throw ValidationError("bounds", "is required for a grid: x0,y0,z0,x1,y1,z1");
+  if (!q.count("bounds"))
+    throw ValidationError("bounds", "is required for a grid: x0,y0,z0,x1,y1,z1");
   std::vector<double> d = numbers(q["dims"], 3, "dims"), b = numbers(q["bounds"], 6, "bounds");
   // A grid is its values and where they sit: both name it.
   const std::string id = sha256_hex(nlohmann::json({d, b}).dump() + "\n" + request.body);
   for (double v : d)
-    if (v != std::floor(v) || v < 1 || v > 512) throw ValidationError("dims", "must be integers in [1, 512]");
-  nlohmann::json header = {{"dims", {int(d[0]), int(d[1]), int(d[2])}}, {"format", "float32"}, {"data", id + ".raw"},
+    if (v != std::floor(v) || v < 1 || v > 512)
+      throw ValidationError("dims", "must be integers in [1, 512]");
+  nlohmann::json header = {{"dims", {int(d[0]), int(d[1]), int(d[2])}},
+                           {"format", "float32"},
+                           {"data", id + ".raw"},
                            {"bounds", {{"min", {b[0], b[1], b[2]}}, {"max", {b[3], b[4], b[5]}}}}};
   auto final_header = dir / (id + ".grid.json");
   if (std::filesystem::exists(final_header)) return json_response(describe(final_header), 200);
@@ -158,7 +173,8 @@ HttpResponse Api::assets(const HttpRequest& request) {
   } catch (const std::exception& e) {
     std::filesystem::remove(tmp_header);
     std::filesystem::remove(dir / (id + ".raw"));
-    throw ValidationError("body", "is not a valid grid: " + plain(plain(e.what(), tmp_header), dir / (id + ".raw")));
+    throw ValidationError(
+        "body", "is not a valid grid: " + plain(plain(e.what(), tmp_header), dir / (id + ".raw")));
   }
   std::filesystem::rename(tmp_header, final_header);
   return json_response(describe(final_header), 201);

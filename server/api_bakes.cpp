@@ -31,27 +31,32 @@ HttpResponse Api::create_bake(const std::string& body) {
   // The job is named by the key of the product it makes (BakeJobs takes a bake key as the id).
   const std::string identity = info.bake_key(*scene, settings);
   bool created = false;
-  auto job = bakes_.submit(identity, pipeline, stages, [&](std::shared_ptr<BakeJob> j) {
-    spdlog::info("event=bake_queued id={} pipeline={}", j->id(), pipeline);
-    RenderQueue::Job work;
-    // On the bake queue's own thread and GPU contexts: live sessions' frames do not wait for it.
-    work.run = [j, scene, pipeline, settings, terms](RenderQueue::Context& c) {
-      j->run([&](const BakeProgress& progress) {
-        return c.pipeline(pipeline).bake(*scene, {terms, settings, nullptr}, progress);
-      });
-      nlohmann::json s = j->status();
-      spdlog::info("event=bake_finished id={} state={} cache_hit={} seconds={}", j->id(), s["state"].get<std::string>(),
-                   s.value("cache_hit", false), s.value("seconds", 0.0));
-    };
-    work.dropped = [j](const std::string& why) {
-      j->cancel();  // a queued job is recorded as cancelled at once
-      spdlog::info("event=bake_dropped id={} reason=\"{}\"", j->id(), why);
-    };
-    if (!bake_queue_.post(std::move(work))) {
-      j->cancel();
-      throw BakeJobs::Busy();
-    }
-  }, &created);
+  auto job = bakes_.submit(
+      identity, pipeline, stages,
+      [&](std::shared_ptr<BakeJob> j) {
+        spdlog::info("event=bake_queued id={} pipeline={}", j->id(), pipeline);
+        RenderQueue::Job work;
+        // On the bake queue's own thread and GPU contexts: live sessions' frames do not wait for
+        // it.
+        work.run = [j, scene, pipeline, settings, terms](RenderQueue::Context& c) {
+          j->run([&](const BakeProgress& progress) {
+            return c.pipeline(pipeline).bake(*scene, {terms, settings, nullptr}, progress);
+          });
+          nlohmann::json s = j->status();
+          spdlog::info("event=bake_finished id={} state={} cache_hit={} seconds={}", j->id(),
+                       s["state"].get<std::string>(), s.value("cache_hit", false),
+                       s.value("seconds", 0.0));
+        };
+        work.dropped = [j](const std::string& why) {
+          j->cancel();  // a queued job is recorded as cancelled at once
+          spdlog::info("event=bake_dropped id={} reason=\"{}\"", j->id(), why);
+        };
+        if (!bake_queue_.post(std::move(work))) {
+          j->cancel();
+          throw BakeJobs::Busy();
+        }
+      },
+      &created);
   HttpResponse response = json_response(job->status(), created ? 202 : 200);
   response.headers.push_back({"Location", "/api/bakes/" + job->id()});
   return response;
@@ -72,7 +77,10 @@ HttpResponse Api::bakes(const HttpRequest& request, const std::string& path) {
   if (!job) return error(404, "no bake job " + id);
   if (request.method == "GET") return json_response(job->status());
   if (request.method == "DELETE") {
-    if (!job->cancel()) return error(409, "bake job " + id + " has already " + (job->state() == BakeJob::State::Done ? "finished" : to_string(job->state())));
+    if (!job->cancel())
+      return error(
+          409, "bake job " + id + " has already " +
+                   (job->state() == BakeJob::State::Done ? "finished" : to_string(job->state())));
     return json_response(job->status(), 202);
   }
   return error(405, request.method + " is not allowed on /api/bakes/{id}: use GET or DELETE");

@@ -3,10 +3,9 @@
 
 #include <filesystem>
 #include <map>
-#include <string_view>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
 
 #include "server/api.hpp"
 

@@ -15,7 +15,8 @@ void fail(beast::error_code ec, const char* what) {
   spdlog::debug("event=http_error stage={} error=\"{}\"", what, ec.message());
 }
 
-http::response<http::string_body> to_beast(const HttpResponse& r, unsigned version, bool keep_alive) {
+http::response<http::string_body> to_beast(const HttpResponse& r, unsigned version,
+                                           bool keep_alive) {
   http::response<http::string_body> res{static_cast<http::status>(r.status), version};
   res.set(http::field::server, "scatterd");
   res.set(http::field::content_type, r.content_type);
@@ -56,8 +57,9 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
     return send(to_beast(r, 11, false));
   }
   if (ec == http::error::header_limit) {
-    HttpResponse r = Api::error(431, "the request's headers are larger than the server's limit of " +
-                                         std::to_string(kHeaderLimit) + " bytes");
+    HttpResponse r =
+        Api::error(431, "the request's headers are larger than the server's limit of " +
+                            std::to_string(kHeaderLimit) + " bytes");
     return send(to_beast(r, 11, false));
   }
   if (ec && ec.category() == http::make_error_code(http::error::bad_target).category() &&
@@ -73,8 +75,9 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
     if (target.substr(0, target.find('?')) == "/api/ws" && api_.authorized(probe)) {
       if (!api_.acquire_session()) {
         api_.metrics().count_request("/api/ws", 503);
-        HttpResponse r = Api::error(503, "all " + std::to_string(api_.options().max_sessions) +
-                                             " live sessions are in use (--max-sessions); try again later");
+        HttpResponse r =
+            Api::error(503, "all " + std::to_string(api_.options().max_sessions) +
+                                " live sessions are in use (--max-sessions); try again later");
         return send(to_beast(r, req.version(), false));
       }
       api_.metrics().count_request("/api/ws", 101);
@@ -83,8 +86,8 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
     }
   }
   cancel_ = std::make_shared<CancelToken>();
-  HttpRequest request{std::string(req.method_string()), std::string(req.target()), std::move(req.body()),
-                      std::string(req[http::field::authorization]), cancel_};
+  HttpRequest request{std::string(req.method_string()), std::string(req.target()),
+                      std::move(req.body()), std::string(req[http::field::authorization]), cancel_};
   unsigned version = req.version();
   bool keep_alive = req.keep_alive();
   auto respond = [self = shared_from_this(), version, keep_alive](HttpResponse r) {
@@ -104,13 +107,15 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
 void HttpSession::watch() {
   watching_ = true;
   stream_.expires_never();  // a long render is not the client's timeout
-  stream_.async_read_some(buffer_.prepare(4096), beast::bind_front_handler(&HttpSession::on_watch, shared_from_this()));
+  stream_.async_read_some(buffer_.prepare(4096),
+                          beast::bind_front_handler(&HttpSession::on_watch, shared_from_this()));
 }
 
 void HttpSession::on_watch(beast::error_code ec, size_t bytes) {
   watching_ = false;
   buffer_.commit(bytes);  // a pipelined request: kept for the next read
-  if (ec && ec != boost::asio::error::operation_aborted && cancel_) cancel_->cancel("the client closed the connection");
+  if (ec && ec != boost::asio::error::operation_aborted && cancel_)
+    cancel_->cancel("the client closed the connection");
   if (after_watch_) std::exchange(after_watch_, nullptr)();
 }
 
@@ -118,8 +123,9 @@ void HttpSession::send(http::response<http::string_body>&& response) {
   response_ = std::make_shared<http::response<http::string_body>>(std::move(response));
   bool keep_alive = response_->keep_alive();
   stream_.expires_after(std::chrono::seconds(60));
-  http::async_write(stream_, *response_,
-                    beast::bind_front_handler(&HttpSession::on_write, shared_from_this(), keep_alive));
+  http::async_write(
+      stream_, *response_,
+      beast::bind_front_handler(&HttpSession::on_write, shared_from_this(), keep_alive));
 }
 
 void HttpSession::on_write(bool keep_alive, beast::error_code ec, size_t) {
@@ -142,9 +148,10 @@ void HttpSession::on_write(bool keep_alive, beast::error_code ec, size_t) {
 
 void HttpSession::do_drain() {
   drain_.resize(64 * 1024);
-  stream_.async_read_some(boost::asio::buffer(drain_), [self = shared_from_this()](beast::error_code ec, size_t) {
-    if (!ec) self->do_drain();
-  });
+  stream_.async_read_some(boost::asio::buffer(drain_),
+                          [self = shared_from_this()](beast::error_code ec, size_t) {
+                            if (!ec) self->do_drain();
+                          });
 }
 
 }  // namespace scatter::server

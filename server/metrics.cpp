@@ -38,7 +38,8 @@ double start_time_seconds() {
 }  // namespace
 
 const std::vector<double>& Metrics::buckets() {
-  static const std::vector<double> b = {0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30};
+  static const std::vector<double> b = {0.005, 0.01, 0.025, 0.05, 0.1, 0.25,
+                                        0.5,   1,    2.5,   5,    10,  30};
   return b;
 }
 
@@ -94,12 +95,16 @@ std::string Metrics::text(size_t queue_depth) const {
            std::to_string(key.second) + "\"} " + std::to_string(n) + "\n";
   out += "# HELP scatter_frame_seconds Render time per frame, by pipeline.\n";
   out += "# TYPE scatter_frame_seconds histogram\n";
-  for (const auto& [pipeline, h] : frames_) print(out, "scatter_frame_seconds", "pipeline=\"" + pipeline + "\"", h);
+  for (const auto& [pipeline, h] : frames_)
+    print(out, "scatter_frame_seconds", "pipeline=\"" + pipeline + "\"", h);
   out += "# HELP scatter_stage_seconds Render time per stage, by pipeline and stage.\n";
   out += "# TYPE scatter_stage_seconds histogram\n";
   for (const auto& [key, h] : stages_)
-    print(out, "scatter_stage_seconds", "pipeline=\"" + key.first + "\",stage=\"" + key.second + "\"", h);
-  out += "# HELP scatter_renders_cancelled_total Renders dropped or stopped: client gone, shutdown, time limit.\n";
+    print(out, "scatter_stage_seconds",
+          "pipeline=\"" + key.first + "\",stage=\"" + key.second + "\"", h);
+  out +=
+      "# HELP scatter_renders_cancelled_total Renders dropped or stopped: client gone, shutdown, "
+      "time limit.\n";
   out += "# TYPE scatter_renders_cancelled_total counter\n";
   out += "scatter_renders_cancelled_total " + std::to_string(cancelled_) + "\n";
   out += "# HELP scatter_render_queue_depth Jobs waiting for the render thread.\n";
@@ -110,7 +115,8 @@ std::string Metrics::text(size_t queue_depth) const {
   process << "# HELP process_resident_memory_bytes Resident memory size in bytes.\n"
           << "# TYPE process_resident_memory_bytes gauge\n"
           << "process_resident_memory_bytes " << resident_bytes() << "\n"
-          << "# HELP process_start_time_seconds Start time of the process since unix epoch in seconds.\n"
+          << "# HELP process_start_time_seconds Start time of the process since unix epoch in "
+             "seconds.\n"
           << "# TYPE process_start_time_seconds gauge\n"
           << "process_start_time_seconds " << start_time_seconds() << "\n";
   return out + process.str();

@@ -34,8 +34,8 @@ class Metrics {
   mutable std::mutex mutex_;
   std::map<std::pair<std::string, int>, long long> requests_;
   long long cancelled_ = 0;
-  std::map<std::string, Histogram> frames_;                             // by pipeline
-  std::map<std::pair<std::string, std::string>, Histogram> stages_;     // by pipeline, stage
+  std::map<std::string, Histogram> frames_;                          // by pipeline
+  std::map<std::pair<std::string, std::string>, Histogram> stages_;  // by pipeline, stage
 };
 
 }  // namespace scatter::server

@@ -27,9 +27,9 @@ RenderResult render_frame(RenderQueue::Context& c, Metrics& metrics, const Frame
   RenderRequest req;
   req.settings = spec.settings;
   auto ok = p.supported_terms();
-  req.terms = !spec.terms.empty() ? parse_terms(spec.terms)
+  req.terms = !spec.terms.empty()                                       ? parse_terms(spec.terms)
               : std::find(ok.begin(), ok.end(), Terms::All) != ok.end() ? Terms::All
-                                                                          : ok.front();
+                                                                        : ok.front();
   if (cancel) {
     if (spec.max_seconds > 0) cancel->set_deadline(spec.max_seconds, "--max-render-s");
     cancel->check();
@@ -41,14 +41,16 @@ RenderResult render_frame(RenderQueue::Context& c, Metrics& metrics, const Frame
   std::vector<std::pair<std::string, double>> stages;
   for (const auto& t : result.timings) stages.emplace_back(t.stage, t.ms / 1000);
   metrics.observe_render(p.name(), seconds, stages);
-  if (spec.scene_load_ms > 0) result.timings.insert(result.timings.begin(), {"scene_load", spec.scene_load_ms});
+  if (spec.scene_load_ms > 0)
+    result.timings.insert(result.timings.begin(), {"scene_load", spec.scene_load_ms});
   return result;
 }
 
 }  // namespace
 
-bool post_render(RenderQueue& queue, Metrics& metrics, FrameSpec spec, std::shared_ptr<CancelToken> cancel,
-                 std::function<void(RenderOutcome)> done, bool bypass_limit) {
+bool post_render(RenderQueue& queue, Metrics& metrics, FrameSpec spec,
+                 std::shared_ptr<CancelToken> cancel, std::function<void(RenderOutcome)> done,
+                 bool bypass_limit) {
   auto finish = std::make_shared<std::function<void(RenderOutcome)>>(std::move(done));
   auto queued = Clock::now();
   RenderQueue::Job job;

@@ -16,14 +16,14 @@
 namespace scatter::server {
 
 struct FrameSpec {
-  std::shared_ptr<const Scene> scene;     // shared, never copied for a frame
-  std::optional<Camera> camera;           // overrides, when set
+  std::shared_ptr<const Scene> scene;  // shared, never copied for a frame
+  std::optional<Camera> camera;        // overrides, when set
   std::optional<std::vector<Light>> lights;
-  int width = 0, height = 0;              // 0: the scene's
-  std::string pipeline = "auto", terms;   // terms empty: all, if the pipeline has it, else its first
+  int width = 0, height = 0;             // 0: the scene's
+  std::string pipeline = "auto", terms;  // terms empty: all, if the pipeline has it, else its first
   Settings settings;
-  double scene_load_ms = 0;               // reported as a "scene_load" stage when > 0
-  double max_seconds = 0;                 // > 0: cancelled once it has run this long (--max-render-s)
+  double scene_load_ms = 0;  // reported as a "scene_load" stage when > 0
+  double max_seconds = 0;    // > 0: cancelled once it has run this long (--max-render-s)
 };
 
 // A request estimated to cost more than the server allows (413); names the field to change.
@@ -39,8 +39,10 @@ struct RenderOutcome {
 };
 
 // Queues the render; `done` runs exactly once, on the render thread (or on the thread that stops
-// the queue). Returns false, calling nothing, when the queue is full (see RenderQueue::post) or stopping.
-bool post_render(RenderQueue& queue, Metrics& metrics, FrameSpec spec, std::shared_ptr<CancelToken> cancel,
-                 std::function<void(RenderOutcome)> done, bool bypass_limit = false);
+// the queue). Returns false, calling nothing, when the queue is full (see RenderQueue::post) or
+// stopping.
+bool post_render(RenderQueue& queue, Metrics& metrics, FrameSpec spec,
+                 std::shared_ptr<CancelToken> cancel, std::function<void(RenderOutcome)> done,
+                 bool bypass_limit = false);
 
 }  // namespace scatter::server

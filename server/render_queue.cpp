@@ -16,7 +16,8 @@ void CancelToken::cancel(const std::string& reason) {
 void CancelToken::set_deadline(double seconds, std::string field) {
   std::lock_guard lock(mutex_);
   deadline_ = std::chrono::steady_clock::now() +
-              std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(seconds));
+              std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                  std::chrono::duration<double>(seconds));
   deadline_s_ = seconds;
   deadline_field_ = std::move(field);
 }
@@ -29,7 +30,8 @@ void CancelToken::check() const {
                        deadline_field_ + ")");
 }
 
-RenderQueue::RenderQueue(gpu::GpuOptions options, BakeCache* cache, size_t max_depth, std::string name)
+RenderQueue::RenderQueue(gpu::GpuOptions options, BakeCache* cache, size_t max_depth,
+                         std::string name)
     : options_(std::move(options)),
       cache_(cache),
       max_depth_(max_depth),

@@ -83,8 +83,8 @@ class RenderQueue {
   // After stop(): waits up to `timeout` for the running job to end; true when the thread is done.
   bool wait_stopped(std::chrono::milliseconds timeout);
 
-  size_t depth() const;       // jobs waiting
-  bool busy() const;          // a job is running
+  size_t depth() const;  // jobs waiting
+  bool busy() const;     // a job is running
   size_t max_depth() const { return max_depth_; }
   BakeCache* cache() const { return cache_; }
 

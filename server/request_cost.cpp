@@ -12,13 +12,15 @@ void Api::check_cost(const ApiOptions& options, const std::string& pipeline, con
   CostEstimate c = estimate_cost(pipeline, scene, request, bake);
   const double mb = c.bytes() / double(1 << 20);
   if (options.max_request_mb > 0 && mb > options.max_request_mb)
-    throw RequestTooCostly(c.memory_field, "would need about " + short_number(mb) + " MB (" + c.summary +
-                                               "), over this server's limit of " + short_number(options.max_request_mb) +
+    throw RequestTooCostly(c.memory_field, "would need about " + short_number(mb) + " MB (" +
+                                               c.summary + "), over this server's limit of " +
+                                               short_number(options.max_request_mb) +
                                                " MB per request (--max-request-mb)");
   // A bake reports progress and can be cancelled; its time is not limited.
   if (!bake && options.max_render_s > 0 && c.seconds > options.max_render_s)
     throw RequestTooCostly(c.time_field, "would take about " + short_number(c.seconds) +
-                                             " s, over this server's limit of " + short_number(options.max_render_s) +
+                                             " s, over this server's limit of " +
+                                             short_number(options.max_render_s) +
                                              " s per render (--max-render-s)");
 }
 

@@ -27,17 +27,20 @@ void named_files(const nlohmann::json& j, const std::filesystem::path& base, int
 }
 
 size_t bytes_of(const Scene& s) {
-  return s.mesh->positions.size() * sizeof(Vec3) * 2 + s.mesh->indices.size() * sizeof(uint32_t) + 4096;
+  return s.mesh->positions.size() * sizeof(Vec3) * 2 + s.mesh->indices.size() * sizeof(uint32_t) +
+         4096;
 }
 
 std::string limits_key(const SceneLimits& l) {
-  return std::to_string(l.max_image) + "," + std::to_string(l.max_voxels) + "," + std::to_string(l.max_lights);
+  return std::to_string(l.max_image) + "," + std::to_string(l.max_voxels) + "," +
+         std::to_string(l.max_lights);
 }
 
 }  // namespace
 
 template <class Load>
-std::shared_ptr<const Scene> SceneLibrary::get(const std::string& key, std::vector<std::filesystem::path> files,
+std::shared_ptr<const Scene> SceneLibrary::get(const std::string& key,
+                                               std::vector<std::filesystem::path> files,
                                                double* load_ms, Load load) {
   std::vector<std::pair<std::filesystem::path, std::filesystem::file_time_type>> stamps;
   for (auto& f : files) {
@@ -62,7 +65,9 @@ std::shared_ptr<const Scene> SceneLibrary::get(const std::string& key, std::vect
   // Loaded outside the lock: a slow import does not hold other requests.
   auto start = std::chrono::steady_clock::now();
   auto scene = std::make_shared<const Scene>(load());
-  if (load_ms) *load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (load_ms)
+    *load_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   std::lock_guard lock(mutex_);
   ++loads_;
   for (auto it = entries_.begin(); it != entries_.end(); ++it)
@@ -81,8 +86,8 @@ std::shared_ptr<const Scene> SceneLibrary::get(const std::string& key, std::vect
   return scene;
 }
 
-std::shared_ptr<const Scene> SceneLibrary::load(const std::filesystem::path& file, const SceneLimits& limits,
-                                                double* load_ms) {
+std::shared_ptr<const Scene> SceneLibrary::load(const std::filesystem::path& file,
+                                                const SceneLimits& limits, double* load_ms) {
   std::vector<std::filesystem::path> files{file};
   {
     std::ifstream in(file);
@@ -94,12 +99,14 @@ std::shared_ptr<const Scene> SceneLibrary::load(const std::filesystem::path& fil
              [&] { return load_scene(file, limits); });
 }
 
-std::shared_ptr<const Scene> SceneLibrary::parse(const nlohmann::json& scene, const std::filesystem::path& base_dir,
+std::shared_ptr<const Scene> SceneLibrary::parse(const nlohmann::json& scene,
+                                                 const std::filesystem::path& base_dir,
                                                  const SceneLimits& limits, double* load_ms) {
   std::vector<std::filesystem::path> files;
   named_files(scene, base_dir, 0, files);
-  return get("json:" + sha256_hex(limits_key(limits) + ":" + base_dir.string() + ":" + scene.dump()), std::move(files), load_ms,
-             [&] { return parse_scene(scene, base_dir, limits); });
+  return get(
+      "json:" + sha256_hex(limits_key(limits) + ":" + base_dir.string() + ":" + scene.dump()),
+      std::move(files), load_ms, [&] { return parse_scene(scene, base_dir, limits); });
 }
 
 SceneLibrary::Stats SceneLibrary::stats() const {

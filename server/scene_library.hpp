@@ -8,10 +8,9 @@
 #include <list>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "scene/scene.hpp"
 
@@ -26,7 +25,8 @@ class SceneLibrary {
   std::shared_ptr<const Scene> load(const std::filesystem::path& file, const SceneLimits& limits,
                                     double* load_ms = nullptr);
   // An inline scene (asset ids already resolved to files); as parse_scene.
-  std::shared_ptr<const Scene> parse(const nlohmann::json& scene, const std::filesystem::path& base_dir,
+  std::shared_ptr<const Scene> parse(const nlohmann::json& scene,
+                                     const std::filesystem::path& base_dir,
                                      const SceneLimits& limits, double* load_ms = nullptr);
 
   struct Stats {

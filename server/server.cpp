@@ -14,11 +14,14 @@ Server::Server(ServerOptions options)
       workers_(static_cast<size_t>(std::max(1, options_.workers))),
       queue_(options_.gpu, options_.cache.get(), options_.max_queue, "render"),
       bake_queue_(options_.gpu, options_.cache.get(), BakeJobs::kMaxActive, "bake"),
-      api_([&] {
-        ApiOptions a = options_.api;
-        a.max_message_bytes = options_.max_upload_mb << 20;
-        return a;
-      }(), queue_, metrics_, &bake_queue_, [this](std::function<void()> f) { boost::asio::post(workers_, std::move(f)); }),
+      api_(
+          [&] {
+            ApiOptions a = options_.api;
+            a.max_message_bytes = options_.max_upload_mb << 20;
+            return a;
+          }(),
+          queue_, metrics_, &bake_queue_,
+          [this](std::function<void()> f) { boost::asio::post(workers_, std::move(f)); }),
       acceptor_(io_),
       stop_timer_(io_) {
   boost::system::error_code ec;
@@ -30,8 +33,8 @@ Server::Server(ServerOptions options)
   if (!ec) acceptor_.bind(endpoint, ec);
   if (!ec) acceptor_.listen(boost::asio::socket_base::max_listen_connections, ec);
   if (ec)
-    throw std::runtime_error("cannot listen on " + options_.bind + ":" + std::to_string(options_.port) +
-                             ": " + ec.message());
+    throw std::runtime_error("cannot listen on " + options_.bind + ":" +
+                             std::to_string(options_.port) + ": " + ec.message());
   port_ = acceptor_.local_endpoint().port();
   do_accept();
 }
@@ -49,20 +52,24 @@ Server::~Server() {
 bool Server::wait_stopped(std::chrono::milliseconds timeout) {
   auto until = std::chrono::steady_clock::now() + timeout;
   bool render = queue_.wait_stopped(timeout);
-  auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now());
+  auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+      until - std::chrono::steady_clock::now());
   return bake_queue_.wait_stopped(std::max(left, std::chrono::milliseconds(0))) && render;
 }
 
 void Server::do_accept() {
-  acceptor_.async_accept(boost::asio::make_strand(io_), [this](boost::system::error_code ec, tcp::socket socket) {
+  acceptor_.async_accept(boost::asio::make_strand(io_), [this](boost::system::error_code ec,
+                                                               tcp::socket socket) {
     if (ec) {
-      if (ec != boost::asio::error::operation_aborted) spdlog::warn("event=accept_error error=\"{}\"", ec.message());
+      if (ec != boost::asio::error::operation_aborted)
+        spdlog::warn("event=accept_error error=\"{}\"", ec.message());
       if (!acceptor_.is_open()) return;
     } else {
       // A frame is a header then an image: without this, Nagle's algorithm holds the image
       // until the client acknowledges the header (its delayed ack: ~40 ms a frame).
       socket.set_option(tcp::no_delay(true), ec);
-      std::make_shared<HttpSession>(std::move(socket), api_, workers_, options_.max_upload_mb << 20)->run();
+      std::make_shared<HttpSession>(std::move(socket), api_, workers_, options_.max_upload_mb << 20)
+          ->run();
     }
     do_accept();
   });

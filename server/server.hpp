@@ -20,7 +20,8 @@ struct ServerOptions {
   size_t max_upload_mb = 64;
   int io_threads = 2;
   int workers = 4;
-  size_t max_queue = 64;  // renders waiting for the render thread (REST; each live session adds one)
+  size_t max_queue =
+      64;  // renders waiting for the render thread (REST; each live session adds one)
   ApiOptions api;
   gpu::GpuOptions gpu;
   std::shared_ptr<BakeCache> cache;  // bake products; null: a memory-only cache

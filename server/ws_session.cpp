@@ -9,7 +9,8 @@ namespace scatter::server {
 namespace beast = boost::beast;
 namespace websocket = beast::websocket;
 
-WsSession::WsSession(boost::asio::ip::tcp::socket&& socket, Api& api, boost::asio::thread_pool& workers)
+WsSession::WsSession(boost::asio::ip::tcp::socket&& socket, Api& api,
+                     boost::asio::thread_pool& workers)
     : ws_(std::move(socket)),
       api_(api),
       queue_(api.queue()),
@@ -46,7 +47,7 @@ void WsSession::end(const std::string& why) {
   refine_timer_.cancel();
   idle_timer_.cancel();
   spdlog::info("event=session_end reason=\"{}\"", why);
-  release_slot();  // at once: a client that does not answer the close must not keep it
+  release_slot();          // at once: a client that does not answer the close must not keep it
   if (!writes_.empty()) {  // a write is pending, and a close is a write too: drop the connection
     beast::error_code ec;
     beast::get_lowest_layer(ws_).socket().close(ec);
@@ -71,7 +72,8 @@ void WsSession::watch_idle() {
   idle_timer_.async_wait([self = shared_from_this(), idle](boost::system::error_code ec) {
     if (ec || self->closed_) return;
     if (std::chrono::steady_clock::now() - self->last_message_ >= idle)
-      return self->end("idle: no message for " + short_number(self->options_.session_idle_s) + " s (--session-idle-s)");
+      return self->end("idle: no message for " + short_number(self->options_.session_idle_s) +
+                       " s (--session-idle-s)");
     self->watch_idle();
   });
 }
@@ -98,7 +100,8 @@ void WsSession::on_read(beast::error_code ec, size_t) {
 void WsSession::dispatch(std::string text) {
   if (hello_pending_) {  // in order, after the hello being read
     if (backlog_.size() >= kMaxBacklog)
-      return send_error("too many messages while the scene loads (" + std::to_string(kMaxBacklog) + ")", "type");
+      return send_error(
+          "too many messages while the scene loads (" + std::to_string(kMaxBacklog) + ")", "type");
     backlog_.push_back(std::move(text));
     return;
   }
@@ -123,7 +126,8 @@ void WsSession::read_hello(nlohmann::json msg) {
       m.string("type", std::nullopt);
       spec = Api::read_render_spec(m, msg, self->options_, self->api_.scenes());
       m.finish();
-      Api::check_cost(self->options_, spec->pipeline, *spec->scene, spec->terms, spec->settings, false);
+      Api::check_cost(self->options_, spec->pipeline, *spec->scene, spec->terms, spec->settings,
+                      false);
     } catch (const ValidationError& e) {
       spec.reset();
       error = e.what();
@@ -132,20 +136,21 @@ void WsSession::read_hello(nlohmann::json msg) {
       spec.reset();
       error = e.what();
     }
-    boost::asio::post(self->ws_.get_executor(), [self, spec = std::move(spec), error, field]() mutable {
-      self->hello_pending_ = false;
-      if (self->closed_) return;
-      if (spec) {
-        self->apply_hello(std::move(*spec));
-      } else {
-        self->send_error(error, field);
-      }
-      while (!self->backlog_.empty() && !self->hello_pending_) {
-        std::string next = std::move(self->backlog_.front());
-        self->backlog_.pop_front();
-        self->dispatch(std::move(next));
-      }
-    });
+    boost::asio::post(self->ws_.get_executor(),
+                      [self, spec = std::move(spec), error, field]() mutable {
+                        self->hello_pending_ = false;
+                        if (self->closed_) return;
+                        if (spec) {
+                          self->apply_hello(std::move(*spec));
+                        } else {
+                          self->send_error(error, field);
+                        }
+                        while (!self->backlog_.empty() && !self->hello_pending_) {
+                          std::string next = std::move(self->backlog_.front());
+                          self->backlog_.pop_front();
+                          self->dispatch(std::move(next));
+                        }
+                      });
   });
 }
 
@@ -184,8 +189,10 @@ void WsSession::handle(const std::string& text) {
     c.fov_deg = m.number("fov_deg", c.fov_deg, {1, 170});
     if (length(c.target - c.position) < 1e-9 ||
         length(cross(normalize(c.target - c.position), c.up)) < 1e-6)
-      throw ValidationError("position", "the camera must look somewhere and up must not be parallel to it");
-    long long rev = static_cast<long long>(m.number("revision", double(camera_revision_ + 1), {0, 9e15}));
+      throw ValidationError("position",
+                            "the camera must look somewhere and up must not be parallel to it");
+    long long rev =
+        static_cast<long long>(m.number("revision", double(camera_revision_ + 1), {0, 9e15}));
     m.finish();
     camera_ = c;
     camera_revision_ = rev;
@@ -194,7 +201,8 @@ void WsSession::handle(const std::string& text) {
     last_change_ = std::chrono::steady_clock::now();
   } else if (type == "lights") {
     if (!scene_) throw ValidationError("type", "send hello first");
-    long long rev = static_cast<long long>(m.number("revision", double(light_revision_ + 1), {0, 9e15}));
+    long long rev =
+        static_cast<long long>(m.number("revision", double(light_revision_ + 1), {0, 9e15}));
     m.array("lights", 0, 16);
     m.finish();
     std::vector<Light> lights = parse_lights(msg["lights"], "lights");
@@ -227,10 +235,12 @@ void WsSession::schedule_refine() {
   if (!last_frame_reduced_ || dirty_) return;
   auto wait = std::chrono::milliseconds(options_.idle_refine_ms) -
               (std::chrono::steady_clock::now() - last_change_);
-  refine_timer_.expires_after(std::max(std::chrono::steady_clock::duration::zero(),
-                                       std::chrono::duration_cast<std::chrono::steady_clock::duration>(wait)));
+  refine_timer_.expires_after(
+      std::max(std::chrono::steady_clock::duration::zero(),
+               std::chrono::duration_cast<std::chrono::steady_clock::duration>(wait)));
   refine_timer_.async_wait([self = shared_from_this()](boost::system::error_code ec) {
-    if (ec || self->closed_ || self->dirty_ || !self->last_frame_reduced_ || self->in_flight_) return;
+    if (ec || self->closed_ || self->dirty_ || !self->last_frame_reduced_ || self->in_flight_)
+      return;
     if (std::chrono::steady_clock::now() - self->last_change_ <
         std::chrono::milliseconds(self->options_.idle_refine_ms))
       return self->schedule_refine();  // moved again meanwhile
@@ -268,12 +278,17 @@ void WsSession::maybe_render() {
   cancel_ = std::make_shared<CancelToken>();
   auto self = shared_from_this();
   // Runs on the render thread: hand the result to this session's strand at once.
-  bool queued = post_render(queue_, metrics_, std::move(f), cancel_, [self, frame, reduced](RenderOutcome o) {
-    boost::asio::post(self->ws_.get_executor(), [self, frame, reduced, o = std::move(o)]() mutable {
-      self->on_rendered(frame, reduced, std::move(o));
-    });
-  }, /*bypass_limit=*/true);
-  if (!queued) on_rendered(frame, reduced, RenderOutcome{std::nullopt, 503, "the server is stopping", "", 0});
+  bool queued = post_render(
+      queue_, metrics_, std::move(f), cancel_,
+      [self, frame, reduced](RenderOutcome o) {
+        boost::asio::post(self->ws_.get_executor(),
+                          [self, frame, reduced, o = std::move(o)]() mutable {
+                            self->on_rendered(frame, reduced, std::move(o));
+                          });
+      },
+      /*bypass_limit=*/true);
+  if (!queued)
+    on_rendered(frame, reduced, RenderOutcome{std::nullopt, 503, "the server is stopping", "", 0});
 }
 
 void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
@@ -286,40 +301,51 @@ void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
     return;
   }
   // Encoded on the worker pool, then sent from this strand.
-  boost::asio::post(workers_, [self = shared_from_this(), frame, reduced, o = std::move(o), format = format_,
-                               cam_rev = frame_camera_revision_, light_rev = frame_light_revision_]() mutable {
-    RenderResult& r = *o.result;
-    nlohmann::json timings = nlohmann::json::object();
-    for (const auto& t : r.timings) timings[t.stage] = t.ms;
-    nlohmann::json header;
-    std::string bytes;
-    try {
-      header = {{"type", "frame"}, {"frame", frame}, {"camera_revision", cam_rev}, {"light_revision", light_rev},
-                {"pipeline", r.plan.pipeline}, {"plan", r.plan},
-                {"timings_ms", timings}, {"queue_wait_ms", o.wait_ms}, {"width", r.image.width}, {"height", r.image.height},
-                {"format", format}, {"reduced", reduced}};
-      bytes = encode_image(r.image, format);
-    } catch (const std::exception& e) {
-      header = {{"type", "error"}, {"error", e.what()}, {"frame", frame}};
-    }
-    boost::asio::post(self->ws_.get_executor(), [self, frame, header = std::move(header), bytes = std::move(bytes)]() mutable {
-      if (self->closed_ || frame != self->in_flight_) return;
-      if (header["type"] != "frame") {
-        self->in_flight_ = 0;
-        self->send(header.dump(), false);
-        return self->maybe_render();
-      }
-      self->send(header.dump(), false);
-      self->send(std::move(bytes), true);
-      self->awaiting_ack_ = true;
-    });
-  });
+  boost::asio::post(
+      workers_, [self = shared_from_this(), frame, reduced, o = std::move(o), format = format_,
+                 cam_rev = frame_camera_revision_, light_rev = frame_light_revision_]() mutable {
+        RenderResult& r = *o.result;
+        nlohmann::json timings = nlohmann::json::object();
+        for (const auto& t : r.timings) timings[t.stage] = t.ms;
+        nlohmann::json header;
+        std::string bytes;
+        try {
+          header = {{"type", "frame"},
+                    {"frame", frame},
+                    {"camera_revision", cam_rev},
+                    {"light_revision", light_rev},
+                    {"pipeline", r.plan.pipeline},
+                    {"plan", r.plan},
+                    {"timings_ms", timings},
+                    {"queue_wait_ms", o.wait_ms},
+                    {"width", r.image.width},
+                    {"height", r.image.height},
+                    {"format", format},
+                    {"reduced", reduced}};
+          bytes = encode_image(r.image, format);
+        } catch (const std::exception& e) {
+          header = {{"type", "error"}, {"error", e.what()}, {"frame", frame}};
+        }
+        boost::asio::post(self->ws_.get_executor(), [self, frame, header = std::move(header),
+                                                     bytes = std::move(bytes)]() mutable {
+          if (self->closed_ || frame != self->in_flight_) return;
+          if (header["type"] != "frame") {
+            self->in_flight_ = 0;
+            self->send(header.dump(), false);
+            return self->maybe_render();
+          }
+          self->send(header.dump(), false);
+          self->send(std::move(bytes), true);
+          self->awaiting_ack_ = true;
+        });
+      });
 }
 
 void WsSession::send(std::string message, bool binary) {
   if (closed_) return;
   if (writes_.size() >= kMaxQueuedWrites)
-    return end("the client does not read its messages (" + std::to_string(kMaxQueuedWrites) + " unsent)");
+    return end("the client does not read its messages (" + std::to_string(kMaxQueuedWrites) +
+               " unsent)");
   writes_.emplace_back(std::make_shared<const std::string>(std::move(message)), binary);
   if (writes_.size() == 1) do_write();
 }
@@ -327,16 +353,17 @@ void WsSession::send(std::string message, bool binary) {
 void WsSession::do_write() {
   auto& [message, binary] = writes_.front();
   ws_.binary(binary);
-  ws_.async_write(boost::asio::buffer(*message), [self = shared_from_this()](beast::error_code ec, size_t) {
-    if (ec) {
-      self->closed_ = true;
-      if (self->cancel_) self->cancel_->cancel("the client left");
-      self->writes_.clear();
-      return;
-    }
-    self->writes_.pop_front();
-    if (!self->writes_.empty() && !self->closed_) self->do_write();
-  });
+  ws_.async_write(boost::asio::buffer(*message),
+                  [self = shared_from_this()](beast::error_code ec, size_t) {
+                    if (ec) {
+                      self->closed_ = true;
+                      if (self->cancel_) self->cancel_->cancel("the client left");
+                      self->writes_.clear();
+                      return;
+                    }
+                    self->writes_.pop_front();
+                    if (!self->writes_.empty() && !self->closed_) self->do_write();
+                  });
 }
 
 }  // namespace scatter::server

@@ -70,8 +70,9 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   const ApiOptions& options_;
 
   // Session state; touched only on the session's strand.
-  std::shared_ptr<const Scene> scene_;  // as loaded, shared; the camera and lights below override it
-  double scene_load_ms_ = 0;            // reported with the first frame after a hello that loaded it
+  std::shared_ptr<const Scene>
+      scene_;                 // as loaded, shared; the camera and lights below override it
+  double scene_load_ms_ = 0;  // reported with the first frame after a hello that loaded it
   Camera camera_;
   std::vector<Light> lights_;
   std::string pipeline_ = "surface", terms_, format_ = "jpg";

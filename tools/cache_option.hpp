@@ -1,10 +1,9 @@
 // --cache-dir, shared by the verbs that bake: where bake products live on disk.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <memory>
 #include <string>
-
-#include <CLI/CLI.hpp>
 
 #include "bake/cache.hpp"
 

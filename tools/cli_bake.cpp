@@ -49,7 +49,8 @@ int run_bake(const BakeOptions& o) {
   std::string last_stage;
   BakeResult r = pipeline->bake(scene, request, [&](const std::string& stage, double f) {
     if (o.json) return;
-    if (stage != last_stage || f >= 1) std::cerr << "bake: " << stage << " " << int(f * 100) << "%\n";
+    if (stage != last_stage || f >= 1)
+      std::cerr << "bake: " << stage << " " << int(f * 100) << "%\n";
     last_stage = stage;
   });
   if (!r.needed) {
@@ -70,7 +71,8 @@ int run_bake(const BakeOptions& o) {
                         {"stats", r.stats}};
     std::cout << j.dump() << "\n";
   } else {
-    std::cout << (r.cache_hit ? "cache hit " : "baked ") << r.key << " (" << pipeline->name() << ")\n";
+    std::cout << (r.cache_hit ? "cache hit " : "baked ") << r.key << " (" << pipeline->name()
+              << ")\n";
   }
   return 0;
 }
@@ -79,12 +81,15 @@ int run_bake(const BakeOptions& o) {
 
 Handler add_bake_command(CLI::App& app) {
   auto o = std::make_shared<BakeOptions>();
-  CLI::App* cmd = app.add_subcommand("bake", "Bake (or find in the cache) a pipeline's per-asset products");
+  CLI::App* cmd =
+      app.add_subcommand("bake", "Bake (or find in the cache) a pipeline's per-asset products");
   cmd->add_option("scene", o->scene, "Scene JSON file")->required();
   cmd->add_option("--pipeline", o->pipeline, "Pipeline name")->capture_default_str();
   cmd->add_option("--directions", o->directions, "Directions of the optical depth (single: 128)");
   cmd->add_option("--samples", o->samples, "Sample count (single: 25000)");
-  cmd->add_option("--sh-order", o->sh_order, "Spherical-harmonic bands, 2-8: 4-64 coefficients (single: 5; the paper uses up to 5)");
+  cmd->add_option(
+      "--sh-order", o->sh_order,
+      "Spherical-harmonic bands, 2-8: 4-64 coefficients (single: 5; the paper uses up to 5)");
   cmd->add_option("--set", o->settings, "Pipeline setting key=value (repeatable)");
   add_cache_options(cmd, o->cache);
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");

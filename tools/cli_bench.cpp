@@ -47,7 +47,8 @@ Sweep parse_sweep(const std::string& text) {
   size_t start = 0;
   while (start <= rest.size()) {
     size_t comma = rest.find(',', start);
-    std::string item = rest.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    std::string item =
+        rest.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     s.values.push_back(parse_settings({s.key + "=" + item}).at(s.key));
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -72,10 +73,10 @@ Reference load_or_render_reference(const BenchOptions& o, const Scene& scene, Te
   if (std::filesystem::exists(path)) {
     ref.image = read_image(path);
     if (ref.image.width != scene.width || ref.image.height != scene.height)
-      throw ValidationError("--reference", path.string() + " is " + std::to_string(ref.image.width) +
-                                               "x" + std::to_string(ref.image.height) +
-                                               ", the scene renders " + std::to_string(scene.width) +
-                                               "x" + std::to_string(scene.height));
+      throw ValidationError("--reference",
+                            path.string() + " is " + std::to_string(ref.image.width) + "x" +
+                                std::to_string(ref.image.height) + ", the scene renders " +
+                                std::to_string(scene.width) + "x" + std::to_string(scene.height));
     if (std::filesystem::exists(std_error_file(path)))
       ref.noise = relative_norm(read_image(std_error_file(path)), ref.image, mask);
     spdlog::info("reference {} (noise {:.3g})", path.string(), ref.noise);
@@ -87,7 +88,8 @@ Reference load_or_render_reference(const BenchOptions& o, const Scene& scene, Te
     request.settings["step"] = 0.125;
   } else {
     request.settings["spp"] = o.reference_spp;
-    request.settings["seed"] = 7919;  // not the swept renders' seed: their noise must be independent
+    request.settings["seed"] =
+        7919;  // not the swept renders' seed: their noise must be independent
   }
   std::cerr << "bench: rendering the reference " << path.string() << " ...\n";
   RenderResult r = pipeline->render(scene, request);
@@ -122,7 +124,8 @@ int run_bench(BenchOptions o) {
     std::snprintf(hash, sizeof hash, "%016zx", std::hash<std::string>{}(key));
     auto stem = std::filesystem::path(o.scene).stem().string();
     o.reference = (std::filesystem::path(o.csv).parent_path() /
-                   (stem + "." + o.terms + "." + hash + ".reference.exr")).string();
+                   (stem + "." + o.terms + "." + hash + ".reference.exr"))
+                      .string();
   }
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
   auto pipeline = make_pipeline(o.pipeline, gpu);
@@ -138,7 +141,8 @@ int run_bench(BenchOptions o) {
     request.settings[sweep.key] = v;
     auto t0 = std::chrono::steady_clock::now();
     pipeline->bake(scene, request);
-    double bake_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    double bake_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     std::vector<double> times;
     std::map<std::string, std::vector<double>> stages;  // first-seen order kept in `order`
     std::vector<std::string> order;
@@ -146,7 +150,8 @@ int run_bench(BenchOptions o) {
     for (int f = 0; f < o.frames; ++f) {
       auto s = std::chrono::steady_clock::now();
       last = pipeline->render(scene, request);
-      times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - s).count());
+      times.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - s).count());
       for (const auto& st : last.timings) {
         if (!stages.count(st.stage)) order.push_back(st.stage);
         stages[st.stage].push_back(st.ms);
@@ -168,8 +173,8 @@ int run_bench(BenchOptions o) {
         << bake_ms << "," << median << "," << o.frames << "," << err << "," << ref.noise << ","
         << stage_ms << "\n";
     std::cout << o.pipeline << " " << sweep.key << "=" << v << ": frame " << median
-              << " ms (median of " << o.frames << "), relative RMSE " << err
-              << " (reference noise " << ref.noise << ")" << std::endl;
+              << " ms (median of " << o.frames << "), relative RMSE " << err << " (reference noise "
+              << ref.noise << ")" << std::endl;
   }
   return 0;
 }
@@ -184,8 +189,10 @@ Handler add_bench_command(CLI::App& app) {
   cmd->add_option("--terms", o->terms, "surface, single, multiple or all")->capture_default_str();
   cmd->add_option("--sweep", o->sweep, "key=v1,v2,...: the setting to vary")->required();
   cmd->add_option("--set", o->settings, "Fixed setting key=value (repeatable)");
-  cmd->add_option("--reference", o->reference, "Reference EXR: read if it exists, else rendered there");
-  cmd->add_option("--reference-spp", o->reference_spp, "Samples per pixel of a Monte Carlo reference")
+  cmd->add_option("--reference", o->reference,
+                  "Reference EXR: read if it exists, else rendered there");
+  cmd->add_option("--reference-spp", o->reference_spp,
+                  "Samples per pixel of a Monte Carlo reference")
       ->capture_default_str();
   cmd->add_option("--frames", o->frames, "Renders per setting; the median time is reported")
       ->capture_default_str();

@@ -1,6 +1,5 @@
 // scatterd devices [--json]: the OpenCL devices and the OpenGL renderer this machine offers.
 #include <iostream>
-
 #include <nlohmann/json.hpp>
 
 #include "gpu/gpu.hpp"
@@ -14,9 +13,14 @@ int run_devices(bool json) {
   nlohmann::json cl = nlohmann::json::array();
   for (const auto& d : devices)
     cl.push_back({{"id", std::to_string(d.platform) + ":" + std::to_string(d.device)},
-                  {"platform", d.platform_name}, {"name", d.name}, {"version", d.version},
-                  {"type", d.type}, {"global_memory", d.global_memory},
-                  {"max_alloc", d.max_alloc}, {"compute_units", d.compute_units}, {"fp64", d.fp64}});
+                  {"platform", d.platform_name},
+                  {"name", d.name},
+                  {"version", d.version},
+                  {"type", d.type},
+                  {"global_memory", d.global_memory},
+                  {"max_alloc", d.max_alloc},
+                  {"compute_units", d.compute_units},
+                  {"fp64", d.fp64}});
   nlohmann::json gl;
   try {
     gpu::GlContext ctx;
@@ -36,9 +40,11 @@ int run_devices(bool json) {
               << d["global_memory"].get<uint64_t>() / (1 << 20) << " MiB, fp64 "
               << (d["fp64"].get<bool>() ? "yes" : "no") << "]\n";
   std::cout << "OpenGL:\n  ";
-  if (gl.contains("error")) std::cout << "unavailable: " << gl["error"].get<std::string>() << "\n";
-  else std::cout << gl["renderer"].get<std::string>() << " (" << gl["version"].get<std::string>()
-                 << ", EGL " << gl["platform"].get<std::string>() << ")\n";
+  if (gl.contains("error"))
+    std::cout << "unavailable: " << gl["error"].get<std::string>() << "\n";
+  else
+    std::cout << gl["renderer"].get<std::string>() << " (" << gl["version"].get<std::string>()
+              << ", EGL " << gl["platform"].get<std::string>() << ")\n";
   return 0;
 }
 

@@ -3,7 +3,6 @@
 // settings table as docs/pipelines/NAME.md holds it.
 #include <iomanip>
 #include <iostream>
-
 #include <nlohmann/json.hpp>
 
 #include "pipelines/registry.hpp"
@@ -36,7 +35,8 @@ int run_pipelines(const PipelinesOptions& o) {
               << to_string(p->default_terms) << ")" << (p->bakes() ? "; bakes" : "") << "\n";
     for (const SettingInfo& s : p->settings)
       std::cout << "  " << s.key << " = " << s.def << "  [" << s.lo << ", " << s.hi << "] "
-                << to_string(s.kind) << ", shapes " << to_string(s.shapes.what) << ": " << s.doc << "\n";
+                << to_string(s.kind) << ", shapes " << to_string(s.shapes.what) << ": " << s.doc
+                << "\n";
   }
   return 0;
 }

@@ -71,7 +71,8 @@ int run_render(const RenderOptions& o) {
     request.terms = parse_terms(o.terms);
   } else {
     auto ok = pipeline->supported_terms();
-    request.terms = std::find(ok.begin(), ok.end(), Terms::All) != ok.end() ? Terms::All : ok.front();
+    request.terms =
+        std::find(ok.begin(), ok.end(), Terms::All) != ok.end() ? Terms::All : ok.front();
   }
   RenderResult result = pipeline->render(scene, request);
   write_image(result.image, o.out, ToneMap{o.exposure});
@@ -88,10 +89,14 @@ int run_render(const RenderOptions& o) {
       timings[t.stage] = t.ms;
       total += t.ms;
     }
-    nlohmann::json j = {{"pipeline", pipeline->name()}, {"terms", to_string(request.terms)},
-                        {"plan", result.plan},          {"timings_ms", timings},
-                        {"total_ms", total},            {"output", o.out},
-                        {"width", result.image.width},  {"height", result.image.height}};
+    nlohmann::json j = {{"pipeline", pipeline->name()},
+                        {"terms", to_string(request.terms)},
+                        {"plan", result.plan},
+                        {"timings_ms", timings},
+                        {"total_ms", total},
+                        {"output", o.out},
+                        {"width", result.image.width},
+                        {"height", result.image.height}};
     if (!std_error_file.empty()) j["std_error_output"] = std_error_file;
     j["stats"] = image_stats(result.image, scene.background);
     std::cout << j.dump() << "\n";
@@ -110,7 +115,8 @@ Handler add_render_command(CLI::App& app) {
   cmd->add_option("scene", o->scene, "Scene JSON file")->required();
   cmd->add_option("--pipeline", o->pipeline, "Pipeline name")->capture_default_str();
   cmd->add_option("--out", o->out, "Output image (.exr linear, .png/.jpg sRGB)")->required();
-  cmd->add_option("--terms", o->terms, "surface, single, multiple or all (default: all the pipeline renders)");
+  cmd->add_option("--terms", o->terms,
+                  "surface, single, multiple or all (default: all the pipeline renders)");
   cmd->add_option("--width", o->width, "Override the scene's image width");
   cmd->add_option("--height", o->height, "Override the scene's image height");
   cmd->add_option("--exposure", o->exposure, "Multiplier before tone mapping (PNG, JPEG)")

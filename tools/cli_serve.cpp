@@ -1,6 +1,7 @@
 // scatterd serve [--bind ADDR] [--port N] [--token T] [--no-token] [--scenes-dir DIR]
 //                [--max-upload-mb N] [--max-image N] [--max-sessions N] [--max-request-mb MB]
-//                [--max-render-s S] [--session-idle-s S] [--max-queue N] [--device D] [--cache-dir DIR]
+//                [--max-render-s S] [--session-idle-s S] [--max-queue N] [--device D] [--cache-dir
+//                DIR]
 #include <spdlog/spdlog.h>
 
 #include <cstdlib>
@@ -35,9 +36,11 @@ constexpr auto kStopGrace = std::chrono::milliseconds(1000);
 
 int run_serve(ServeOptions o) {
   if (o.token_given && o.server.api.token.empty())
-    throw std::runtime_error("--token: is empty; give a secret, or --no-token to serve without one");
+    throw std::runtime_error(
+        "--token: is empty; give a secret, or --no-token to serve without one");
   if (!o.token_given && !o.no_token && !is_loopback(o.server.bind))
-    throw std::runtime_error("--bind " + o.server.bind + " serves beyond this machine: give --token T "
+    throw std::runtime_error("--bind " + o.server.bind +
+                             " serves beyond this machine: give --token T "
                              "(or $SCATTER_TOKEN), or --no-token to serve without authentication");
   o.server.api.scenes_dir = o.scenes_dir;
   if (!std::filesystem::is_directory(o.server.api.scenes_dir))
@@ -66,29 +69,38 @@ Handler add_serve_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("serve", "Serve the REST API (renders, devices, metrics)");
   cmd->add_option("--bind", o->server.bind, "Address to listen on")->capture_default_str();
   cmd->add_option("--port", o->server.port, "Port (0: any free port)")->capture_default_str();
-  cmd->add_option("--token", o->server.api.token, "Require \"Authorization: Bearer TOKEN\" (or ?token=)")
+  cmd->add_option("--token", o->server.api.token,
+                  "Require \"Authorization: Bearer TOKEN\" (or ?token=)")
       ->envname("SCATTER_TOKEN")
       ->each([o](const std::string&) { o->token_given = true; });
   cmd->add_flag("--no-token", o->no_token, "Serve without a token on a non-loopback --bind");
   cmd->add_option("--scenes-dir", o->scenes_dir, "Shipped scenes, and base of relative mesh paths")
       ->capture_default_str();
   cmd->add_option("--max-upload-mb", o->server.max_upload_mb, "Largest request body")
-      ->capture_default_str()->check(CLI::Range(1, 4096));
+      ->capture_default_str()
+      ->check(CLI::Range(1, 4096));
   cmd->add_option("--max-image", o->server.api.max_image, "Largest image side a request may ask")
-      ->capture_default_str()->check(CLI::Range(16, 8192));
+      ->capture_default_str()
+      ->check(CLI::Range(16, 8192));
   cmd->add_option("--max-sessions", o->server.api.max_sessions, "Live WebSocket sessions at once")
-      ->capture_default_str()->check(CLI::Range(1, 10000));
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000));
   cmd->add_option("--max-request-mb", o->server.api.max_request_mb,
                   "Largest estimated host + device memory of one render or bake")
-      ->capture_default_str()->check(CLI::Range(16.0, 1e7));
+      ->capture_default_str()
+      ->check(CLI::Range(16.0, 1e7));
   cmd->add_option("--max-render-s", o->server.api.max_render_s,
                   "Longest estimated (and enforced) time of one render")
-      ->capture_default_str()->check(CLI::Range(0.1, 1e6));
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 1e6));
   cmd->add_option("--session-idle-s", o->server.api.session_idle_s,
                   "A live session that sends nothing for this long is closed")
-      ->capture_default_str()->check(CLI::Range(1.0, 1e6));
-  cmd->add_option("--max-queue", o->server.max_queue, "REST renders that may wait for the render thread")
-      ->capture_default_str()->check(CLI::Range(1, 100000));
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e6));
+  cmd->add_option("--max-queue", o->server.max_queue,
+                  "REST renders that may wait for the render thread")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
   cmd->add_option("--device", o->server.gpu.cl_device, "OpenCL device: P:D or part of its name");
   add_cache_options(cmd, o->cache);
   return [o] { return run_serve(*o); };

@@ -35,7 +35,8 @@ int run_slab(SlabOptions o) {
       throw ValidationError("--tau", "expects a number or inf, got \"" + o.tau + "\"");
   }
   if (o.solver != "reference" && o.solver != "lbl")
-    throw ValidationError("--solver", "unknown solver \"" + o.solver + "\" (known: reference, lbl)");
+    throw ValidationError("--solver",
+                          "unknown solver \"" + o.solver + "\" (known: reference, lbl)");
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
   nlohmann::json j;
   if (o.solver == "lbl")
@@ -56,14 +57,17 @@ Handler add_slab_command(CLI::App& app) {
   auto o = std::make_shared<SlabOptions>();
   CLI::App* cmd = app.add_subcommand(
       "slab", "Reflectance and transmittance of a plane-parallel slab lit by a collimated beam");
-  cmd->add_option("--tau", o->tau, "Optical thickness, or inf for a half-space")->capture_default_str();
+  cmd->add_option("--tau", o->tau, "Optical thickness, or inf for a half-space")
+      ->capture_default_str();
   cmd->add_option("--albedo", o->params.albedo, "Single-scattering albedo")->capture_default_str();
   cmd->add_option("--g", o->params.g, "Henyey-Greenstein asymmetry")->capture_default_str();
   cmd->add_option("--mu0", o->params.mu0, "Cosine of the incidence angle")->capture_default_str();
-  cmd->add_option("--ior", o->params.ior, "Refractive index of the slab (outside: 1)")->capture_default_str();
+  cmd->add_option("--ior", o->params.ior, "Refractive index of the slab (outside: 1)")
+      ->capture_default_str();
   cmd->add_option("--photons", o->params.photons, "Photons to trace")->capture_default_str();
   cmd->add_option("--seed", o->params.seed, "Random seed")->capture_default_str();
-  cmd->add_option("--solver", o->solver, "reference (transport, Monte Carlo) or lbl (the lattice)")->capture_default_str();
+  cmd->add_option("--solver", o->solver, "reference (transport, Monte Carlo) or lbl (the lattice)")
+      ->capture_default_str();
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");
   cmd->add_flag("--json", o->json, "Print one JSON object");
   return [o] { return run_slab(*o); };

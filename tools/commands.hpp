@@ -2,9 +2,8 @@
 // runs it; handlers throw on error and main() turns that into one line on stderr.
 #pragma once
 
-#include <functional>
-
 #include <CLI/CLI.hpp>
+#include <functional>
 
 namespace scatter::tools {
 

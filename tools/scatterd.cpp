@@ -1,4 +1,5 @@
-// scatterd: the scatter daemon and its one-shot verbs (render, bake, slab, bench, devices, pipelines).
+// scatterd: the scatter daemon and its one-shot verbs (render, bake, slab, bench, devices,
+// pipelines).
 #include <spdlog/spdlog.h>
 
 #include <iostream>

@@ -32,7 +32,8 @@ std::vector<float> pack_camera(const Camera& c, int width, int height) {
 }
 
 cl::Buffer upload(gpu::ClContext& cl, const std::vector<float>& data) {
-  if (data.empty()) return cl::Buffer(cl.context(), CL_MEM_READ_ONLY, sizeof(float));  // placeholder
+  if (data.empty())
+    return cl::Buffer(cl.context(), CL_MEM_READ_ONLY, sizeof(float));  // placeholder
   return cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
                     std::max<size_t>(data.size(), 1) * sizeof(float),
                     const_cast<float*>(data.data()));

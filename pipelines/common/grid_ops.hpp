@@ -9,7 +9,7 @@
 namespace scatter {
 
 struct BrickGrid {
-  int brick = 8;           // voxels per brick side
+  int brick = 8;  // voxels per brick side
   int bx = 0, by = 0, bz = 0;
   std::vector<float> majorant;  // per brick, x fastest: max extinction over brick + apron
 };

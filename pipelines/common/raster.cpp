@@ -149,12 +149,14 @@ void set_light_uniforms(GLuint p, const std::vector<Light>& lights) {
   const double to_rad = std::numbers::pi / 180;
   for (size_t i = 0; i < lights.size(); ++i) {
     const Light& l = lights[i];
-    uniform1i(p, indexed("light_type", i), l.type == Light::Type::Point ? 0 : (l.type == Light::Type::Directional ? 1 : 2));
+    uniform1i(p, indexed("light_type", i),
+              l.type == Light::Type::Point ? 0 : (l.type == Light::Type::Directional ? 1 : 2));
     uniform3(p, indexed("light_position", i), l.position);
     uniform3(p, indexed("light_direction", i), l.direction);
     uniform3(p, indexed("light_power", i), l.color * l.intensity);
     glProgramUniform2f(p, glGetUniformLocation(p, indexed("light_cone", i).c_str()),
-                       float(std::cos(l.outer_deg * to_rad)), float(std::cos(l.inner_deg * to_rad)));
+                       float(std::cos(l.outer_deg * to_rad)),
+                       float(std::cos(l.inner_deg * to_rad)));
   }
   uniform1i(p, "light_count", static_cast<int>(lights.size()));
 }
@@ -184,14 +186,16 @@ LightView light_view(const Light& l, const Scene& scene, const std::string& pipe
   }
   double dist = length(c - l.position);
   if (dist <= radius * 1.01)
-    throw ValidationError("scene.lights", "the " + pipeline + " pipeline's shadow maps need every point or "
-                                          "spot light outside the object's bounding sphere");
+    throw ValidationError("scene.lights", "the " + pipeline +
+                                              " pipeline's shadow maps need every point or "
+                                              "spot light outside the object's bounding sphere");
   v.origin = l.position;
   v.direction = normalize(c - l.position);
   Vec3 up = std::abs(v.direction.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
   v.view = look_at(l.position, c, up);
   double half_angle = std::asin(radius / dist);
-  v.projection = perspective(2 * half_angle * 1.02, 1.0, std::max(dist - radius, dist * 1e-3), dist + radius);
+  v.projection =
+      perspective(2 * half_angle * 1.02, 1.0, std::max(dist - radius, dist * 1e-3), dist + radius);
   return v;
 }
 

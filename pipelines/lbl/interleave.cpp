@@ -18,8 +18,8 @@ InterleaveResult march_interleaved(gpu::ClContext& cl, const ClVolume& v, const 
   cl::Kernel start(program, "march_start"), round(program, "march_round");
   gpu::set_args(start, v.origin, v.voxel, v.nx, v.ny, v.nz, v.n, rays, count, float(cutoff), state);
   queue.enqueueNDRangeKernel(start, cl::NullRange, cl::NDRange(size_t(count)));
-  gpu::set_args(round, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_s, v.sigma_t, v.n, v.grad, count,
-                bend ? 1 : 0, float(step), k, float(g), state, deposit, source, alive);
+  gpu::set_args(round, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_s, v.sigma_t, v.n, v.grad,
+                count, bend ? 1 : 0, float(step), k, float(g), state, deposit, source, alive);
   // A ray crosses the grid's diagonal in at most this many rounds (bent ones a few times more).
   const int bound = static_cast<int>(4.0 * (v.nx + v.ny + v.nz) * v.voxel / step / k) + 8;
   cl_int live = 1;

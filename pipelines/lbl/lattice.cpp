@@ -24,20 +24,25 @@ cl::Buffer device_buffer(gpu::ClContext& cl, size_t floats) {
 Lattice::Lattice(gpu::ClContext& cl, const LatticeCoefficients& c, LatticeOptions options)
     : cl_(cl), o_(options), nx_(c.nx), ny_(c.ny), nz_(c.nz), n_(size_t(c.nx) * c.ny * c.nz) {
   if (o_.blocked) {
-    if (o_.block < 1 || o_.block > 8) throw std::invalid_argument("lattice block must be in [1, 8]");
+    if (o_.block < 1 || o_.block > 8)
+      throw std::invalid_argument("lattice block must be in [1, 8]");
     if (nx_ % o_.block || ny_ % o_.block || nz_ % o_.block)
       throw std::invalid_argument("lattice sides must be multiples of the block size");
     for (Edge e : o_.edges)
-      if (e == Edge::Periodic) throw std::invalid_argument("the blocked lattice has no periodic edges");
+      if (e == Edge::Periodic)
+        throw std::invalid_argument("the blocked lattice has no periodic edges");
     if (o_.inner < 1) throw std::invalid_argument("lattice inner steps must be at least 1");
   }
-  if (o_.directions != 6 && o_.directions != 18) throw std::invalid_argument("lattice directions must be 6 or 18");
-  if (o_.directions == 18 && o_.blocked) throw std::invalid_argument("the 18-direction lattice has no blocked form");
+  if (o_.directions != 6 && o_.directions != 18)
+    throw std::invalid_argument("lattice directions must be 6 or 18");
+  if (o_.directions == 18 && o_.blocked)
+    throw std::invalid_argument("the 18-direction lattice has no blocked form");
   pt_ = upload(cl, c.pt);
   ps_ = upload(cl, c.ps);
   w_ = upload(cl, c.w);
   if (o_.directions == 18) {
-    if (c.pt_diag.size() != c.pt.size() || c.ps_diag.size() != c.pt.size() || c.w_diag.size() != c.pt.size())
+    if (c.pt_diag.size() != c.pt.size() || c.ps_diag.size() != c.pt.size() ||
+        c.w_diag.size() != c.pt.size())
       throw std::invalid_argument("the 18-direction lattice needs the diagonal coefficients");
     pt_d_ = upload(cl, c.pt_diag);
     ps_d_ = upload(cl, c.ps_diag);
@@ -79,12 +84,14 @@ void Lattice::set_source(const cl::Buffer& deposit) {
 }
 
 void Lattice::set_source(const std::vector<float>& deposit) {
-  if (deposit.size() != 3 * n_) throw std::invalid_argument("lattice source must hold 3 floats per node");
+  if (deposit.size() != 3 * n_)
+    throw std::invalid_argument("lattice source must hold 3 floats per node");
   cl_.queue().enqueueWriteBuffer(src_, CL_TRUE, 0, deposit.size() * sizeof(float), deposit.data());
 }
 
 void Lattice::set_state(const std::vector<float>& f) {
-  if (f.size() != floats()) throw std::invalid_argument("lattice state must hold 3 floats per node and direction");
+  if (f.size() != floats())
+    throw std::invalid_argument("lattice state must hold 3 floats per node and direction");
   cl_.queue().enqueueWriteBuffer(f_[cur_], CL_TRUE, 0, f.size() * sizeof(float), f.data());
   if (!o_.blocked) return;
   cl::Kernel k(cl_.program({"kernels/lbl/lattice.cl"}, "-DLBL_B=" + std::to_string(o_.block)),
@@ -117,7 +124,8 @@ int Lattice::step(int steps) {
                     f_[cur_], f_[next], irr_);
       cl_.queue().enqueueNDRangeKernel(step_kernel_, cl::NullRange, cl::NDRange(nx_, ny_, nz_));
     } else {
-      gpu::set_args(step_kernel_, nx_, ny_, nz_, ex, ey, ez, pt_, ps_, w_, src_, f_[cur_], f_[next], irr_);
+      gpu::set_args(step_kernel_, nx_, ny_, nz_, ex, ey, ez, pt_, ps_, w_, src_, f_[cur_], f_[next],
+                    irr_);
       cl_.queue().enqueueNDRangeKernel(step_kernel_, cl::NullRange, cl::NDRange(nx_, ny_, nz_));
     }
     cur_ = next;
@@ -165,9 +173,11 @@ Convergence Lattice::converge(double tolerance, int max_steps, int check_every,
     // Probes far below the brightest one change by relative amounts that do not show.
     double change = 0;
     for (size_t i = 0; i < now.size(); ++i)
-      change = std::max(change, std::abs(now[i] - before[i]) / std::max({std::abs(now[i]), 1e-3 * scale, 1e-30}));
+      change = std::max(
+          change, std::abs(now[i] - before[i]) / std::max({std::abs(now[i]), 1e-3 * scale, 1e-30}));
     if (energy_now > 0 || energy_before > 0)
-      change = std::max(change, std::abs(energy_now - energy_before) / std::max(energy_now, energy_before));
+      change = std::max(change,
+                        std::abs(energy_now - energy_before) / std::max(energy_now, energy_before));
     c.change = change;
     if (!(std::isfinite(change))) break;
     if (change < tolerance) {
@@ -185,7 +195,8 @@ double Lattice::time_steps(int steps) {
   auto t0 = std::chrono::steady_clock::now();
   int done = step(steps);
   cl_.queue().finish();
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / done;
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
+         done;
 }
 
 double Lattice::time_copy(int copies) {
@@ -194,9 +205,11 @@ double Lattice::time_copy(int copies) {
   gpu::set_args(k, f_[cur_], f_[1 - cur_]);
   cl_.queue().finish();
   auto t0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < copies; ++i) cl_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(floats() / 4));
+  for (int i = 0; i < copies; ++i)
+    cl_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(floats() / 4));
   cl_.queue().finish();
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / copies;
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
+         copies;
 }
 
 }  // namespace scatter::lbl

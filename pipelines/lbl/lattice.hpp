@@ -24,9 +24,9 @@ struct LatticeOptions {
 };
 
 struct Convergence {
-  int steps = 0;          // lattice steps taken by this call
+  int steps = 0;  // lattice steps taken by this call
   bool converged = false;
-  double change = 0;      // the last relative change measured
+  double change = 0;  // the last relative change measured
 };
 
 class Lattice {
@@ -65,7 +65,9 @@ class Lattice {
   double time_steps(int steps);
   double time_copy(int copies);
   // f in and out, coefficients (3 or 6 arrays of 3) and source, irradiance.
-  double step_bytes() const { return double(n_) * (6 * o_.directions + (o_.directions == 6 ? 12 : 21) + 3) * sizeof(float); }
+  double step_bytes() const {
+    return double(n_) * (6 * o_.directions + (o_.directions == 6 ? 12 : 21) + 3) * sizeof(float);
+  }
   double copy_bytes() const { return double(n_) * 6 * o_.directions * sizeof(float); }
 
  private:

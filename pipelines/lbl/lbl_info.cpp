@@ -11,10 +11,13 @@ const SettingsTable<LblSettings>& lbl_settings() {
       "lbl",
       {setting("rays", &S::rays, 0.25, 8, kept("lights"), "light rays per voxel width"),
        setting("step", &S::step, 0.05, 2, kept("lights"), "the Eikonal step, in voxels"),
-       setting("smooth", &S::smooth, 0, 4, kept("material"), "Gaussian on the refractive index, in voxels"),
-       setting("cutoff", &S::cutoff, 0, 0.5, kept("lights"), "a light ray stops under this fraction of its power"),
+       setting("smooth", &S::smooth, 0, 4, kept("material"),
+               "Gaussian on the refractive index, in voxels"),
+       setting("cutoff", &S::cutoff, 0, 0.5, kept("lights"),
+               "a light ray stops under this fraction of its power"),
        flag("blocked", &S::blocked, kept("material"),
-            "1: the paper's blocks with interface buffers; 0: the global lattice (faster on a CPU device)"),
+            "1: the paper's blocks with interface buffers; 0: the global lattice (faster on a CPU "
+            "device)"),
        setting("block", &S::block, 1, 8, kept("material"), "the blocks' side b, in nodes"),
        setting("inner", &S::inner, 1, 16, kept("material"), "lattice steps per block launch"),
        one_of(setting("directions", &S::directions, 6, 18, kept("material"),
@@ -22,40 +25,53 @@ const SettingsTable<LblSettings>& lbl_settings() {
               {6, 18}),
        setting("tolerance", &S::tolerance, 1e-6, 0.5, kept("diffusion"),
                "relative change per check that ends the diffusion"),
-       setting("max_steps", &S::max_steps, 1, 1000000, kept("diffusion"), "lattice steps per diffusion, at most"),
-       setting("check_every", &S::check_every, 1, 1024, kept("diffusion"), "lattice steps between convergence checks"),
+       setting("max_steps", &S::max_steps, 1, 1000000, kept("diffusion"),
+               "lattice steps per diffusion, at most"),
+       setting("check_every", &S::check_every, 1, 1024, kept("diffusion"),
+               "lattice steps between convergence checks"),
        flag("warm", &S::warm, frame(), "1: start the diffusion from the last state"),
        setting("skip_multiple", &S::skip_multiple, 0, 1, frame(),
-               "skip the lattice when a scattered photon's chance to scatter again, 1 - exp(-max sigma_s x "
+               "skip the lattice when a scattered photon's chance to scatter again, 1 - exp(-max "
+               "sigma_s x "
                "longest side), is under this"),
        flag("measure", &S::measure, frame(),
-            "1: after a diffusion, time 16 more lattice steps and 16 copies of its state (stage bandwidth)"),
+            "1: after a diffusion, time 16 more lattice steps and 16 copies of its state (stage "
+            "bandwidth)"),
        setting("interleave", &S::interleave, 0, 4096, kept("lights"),
-               "k > 0: march in rounds of k steps, each followed by k x step lattice steps (the paper's Table I); "
+               "k > 0: march in rounds of k steps, each followed by k x step lattice steps (the "
+               "paper's Table I); "
                "0: march, then diffuse")},
       [](const LblSettings& s) {
         if (s.directions == 18 && s.blocked)
-          throw ValidationError("settings.blocked", "the 18-direction lattice runs on the whole grid only (blocked 0)");
+          throw ValidationError("settings.blocked",
+                                "the 18-direction lattice runs on the whole grid only (blocked 0)");
       });
   return table;
 }
 
-LblSettings LblSettings::read(const Settings& settings) { return lbl_settings().read(settings); }
+LblSettings LblSettings::read(const Settings& settings) {
+  return lbl_settings().read(settings);
+}
 
 const PipelineInfo& lbl_info() {
-  static const PipelineInfo info = describe<LblPipeline>(lbl_settings(), {
-      .summary = "single and multiple scattering with refraction: light rays marched by the ray equation deposit "
-                 "what they scatter, a lattice-Boltzmann diffusion spreads it, eye rays gather both; kept across "
-                 "camera moves, OpenCL",
-      .method = "docs/pipelines/lbl.md (papers/lbl-scattering-refraction.md)",
-      .terms = {Terms::Surface, Terms::Single, Terms::Multiple, Terms::All},
-      .default_terms = Terms::All,
-      .qualities = {{"draft", {{"rays", 1}, {"tolerance", 0.003}}},
-                    {"normal", {}},
-                    {"high", {{"rays", 3}, {"directions", 18}, {"tolerance", 0.0003}}}}});
+  static const PipelineInfo info = describe<LblPipeline>(
+      lbl_settings(),
+      {.summary = "single and multiple scattering with refraction: light rays marched by the ray "
+                  "equation deposit "
+                  "what they scatter, a lattice-Boltzmann diffusion spreads it, eye rays gather "
+                  "both; kept across "
+                  "camera moves, OpenCL",
+       .method = "docs/pipelines/lbl.md (papers/lbl-scattering-refraction.md)",
+       .terms = {Terms::Surface, Terms::Single, Terms::Multiple, Terms::All},
+       .default_terms = Terms::All,
+       .qualities = {{"draft", {{"rays", 1}, {"tolerance", 0.003}}},
+                     {"normal", {}},
+                     {"high", {{"rays", 3}, {"directions", 18}, {"tolerance", 0.0003}}}}});
   return info;
 }
 
-const PipelineInfo& LblPipeline::info() const { return lbl_info(); }
+const PipelineInfo& LblPipeline::info() const {
+  return lbl_info();
+}
 
 }  // namespace scatter

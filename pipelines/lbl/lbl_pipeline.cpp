@@ -55,13 +55,15 @@ void check_lattice_size(const Scene& scene, const LblSettings& s, int margin, ui
   double longest = std::max({size.x, size.y, size.z});
   if (!(longest > 0)) return;
   double nodes = 1;
-  for (int a = 0; a < 3; ++a) nodes *= std::ceil(size[a] / longest * scene.voxels) + 2 * margin + s.block;
+  for (int a = 0; a < 3; ++a)
+    nodes *= std::ceil(size[a] / longest * scene.voxels) + 2 * margin + s.block;
   double bytes = 3.0 * s.directions * nodes * sizeof(float);
   if (bytes > double(max_alloc))
-    throw ValidationError("voxels", "the lbl lattice would need " + std::to_string(long(bytes / (1 << 20))) +
-                                        " MiB per state buffer, more than the device's " +
-                                        std::to_string(long(max_alloc >> 20)) + " MiB: use fewer voxels" +
-                                        (s.directions == 18 ? " or 6 directions" : ""));
+    throw ValidationError("voxels",
+                          "the lbl lattice would need " + std::to_string(long(bytes / (1 << 20))) +
+                              " MiB per state buffer, more than the device's " +
+                              std::to_string(long(max_alloc >> 20)) + " MiB: use fewer voxels" +
+                              (s.directions == 18 ? " or 6 directions" : ""));
 }
 
 }  // namespace
@@ -69,7 +71,7 @@ void check_lattice_size(const Scene& scene, const LblSettings& s, int margin, ui
 namespace lbl {
 
 struct State {
-  std::string material, lights, diffusion;  // keys of what is loaded
+  std::string material, lights, diffusion;      // keys of what is loaded
   std::shared_ptr<const DensityField> density;  // keeps the keyed address alive
   Volume volume;
   ClVolume device;
@@ -124,16 +126,17 @@ StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
   if (!d.multiple)
     why = "the single term needs no diffusion";
   else if (d.tiny)
-    why = "a scattered photon scatters again with chance at most " + short_number(d.bound) + d.bound_note +
-          " < skip_multiple " + short_number(s.skip_multiple) + ": multiple term taken as 0";
+    why = "a scattered photon scatters again with chance at most " + short_number(d.bound) +
+          d.bound_note + " < skip_multiple " + short_number(s.skip_multiple) +
+          ": multiple term taken as 0";
   else if (!d.diffuse)
     why = "camera-only change: converged irradiance kept";
   else
     why = std::string(s.blocked ? "blocks of " + std::to_string(s.block) + "^3, " +
                                       std::to_string(s.inner) + " steps per launch"
                                 : "global lattice") +
-          ", " + std::to_string(s.directions) + " directions + rest, until the change is under " + short_number(s.tolerance) + " (at most " +
-          std::to_string(s.max_steps) + " steps)" +
+          ", " + std::to_string(s.directions) + " directions + rest, until the change is under " +
+          short_number(s.tolerance) + " (at most " + std::to_string(s.max_steps) + " steps)" +
           (!d.material && s.warm ? ", warm start from the last state" : "");
   return {"diffuse", d.diffuse, why};
 }
@@ -141,25 +144,32 @@ StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
 Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Decision& d) {
   Plan p{"lbl", terms, {}};
   p.stages.push_back({"volume", d.material,
-                      d.material ? std::to_string(scene.voxels) + " voxels on the long side; n, grad n smoothed over " +
+                      d.material ? std::to_string(scene.voxels) +
+                                       " voxels on the long side; n, grad n smoothed over " +
                                        short_number(s.smooth) + " voxels"
                                  : "material unchanged: volume kept"});
   std::string path = d.bend ? "bent by the ray equation, step " + short_number(s.step) + " voxels"
                             : "constant n: straight rays, exact voxel crossings (no gradient)";
   p.stages.push_back({"march", d.march,
-                      d.march ? std::to_string(scene.lights.size()) + " lights, " + short_number(s.rays) +
-                                    " rays per voxel width, " + path + "; deposits added by CAS atomics"
+                      d.march ? std::to_string(scene.lights.size()) + " lights, " +
+                                    short_number(s.rays) + " rays per voxel width, " + path +
+                                    "; deposits added by CAS atomics"
                               : "lights and material unchanged: deposit kept"});
   p.stages.push_back(diffuse_stage(d, s));
   if (s.measure)
-    p.stages.push_back({"bandwidth", d.diffuse, d.diffuse ? "16 more lattice steps and 16 copies of its state, timed"
-                                                          : "nothing diffused in this frame"});
-  std::string gathers = d.single && d.multiple ? "deposit + lattice" : (d.single ? "the deposit" : "the lattice");
-  std::string phase = scene.medium.g != 0 ? "; phase taken isotropic (g " + short_number(scene.medium.g) +
-                                                " enters the lattice and its source delta-Eddington scaled)"
-                                          : "";
-  p.stages.push_back({"view", true, std::string(d.bend ? "eye rays refracted by grad n" : "straight eye rays (DDA)") +
-                                        ", gathering " + gathers + phase});
+    p.stages.push_back({"bandwidth", d.diffuse,
+                        d.diffuse ? "16 more lattice steps and 16 copies of its state, timed"
+                                  : "nothing diffused in this frame"});
+  std::string gathers =
+      d.single && d.multiple ? "deposit + lattice" : (d.single ? "the deposit" : "the lattice");
+  std::string phase = scene.medium.g != 0
+                          ? "; phase taken isotropic (g " + short_number(scene.medium.g) +
+                                " enters the lattice and its source delta-Eddington scaled)"
+                          : "";
+  p.stages.push_back(
+      {"view", true,
+       std::string(d.bend ? "eye rays refracted by grad n" : "straight eye rays (DDA)") +
+           ", gathering " + gathers + phase});
   p.stages.push_back({"readback", true, "linear RGB to the host"});
   return p;
 }
@@ -213,12 +223,15 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     next->volume = lbl::make_volume(grid, scene.medium.ior, s.smooth, s.blocked ? s.block : 1);
     next->device = lbl::upload_volume(cl, next->volume);
     for (float x : next->volume.sigma_s) next->max_sigma_s = std::max<double>(next->max_sigma_s, x);
-    lbl::LatticeOptions o{.blocked = s.blocked, .block = s.block, .inner = s.inner, .directions = s.directions};
-    next->lattice = std::make_unique<lbl::Lattice>(cl, lbl::lattice_coefficients(next->volume, scene.medium.g), o);
-    next->deposit = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));
-    next->source = scene.medium.g == 0
-                       ? next->deposit
-                       : cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));
+    lbl::LatticeOptions o{
+        .blocked = s.blocked, .block = s.block, .inner = s.inner, .directions = s.directions};
+    next->lattice = std::make_unique<lbl::Lattice>(
+        cl, lbl::lattice_coefficients(next->volume, scene.medium.g), o);
+    next->deposit =
+        cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));
+    next->source = scene.medium.g == 0 ? next->deposit
+                                       : cl::Buffer(cl.context(), CL_MEM_READ_WRITE,
+                                                    3 * next->volume.count() * sizeof(float));
     next->material = material_key(scene, s);
     next->density = scene.medium.density;
     state_ = std::move(next);
@@ -247,9 +260,10 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
           cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff,
           scene.medium.g, st.deposit, st.source, *st.lattice, s.interleave, per_round);
       interleaved_steps = ir.lattice_steps;
-      plan_stage(result.plan, "march").reason += "; interleaved: " + std::to_string(ir.rounds) + " rounds of " +
-                                      std::to_string(s.interleave) + " steps, each followed by " +
-                                      std::to_string(per_round) + " lattice steps";
+      plan_stage(result.plan, "march").reason += "; interleaved: " + std::to_string(ir.rounds) +
+                                                 " rounds of " + std::to_string(s.interleave) +
+                                                 " steps, each followed by " +
+                                                 std::to_string(per_round) + " lattice steps";
     } else {
       lbl::march(cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff,
                  scene.medium.g, st.deposit, st.source);
@@ -262,21 +276,25 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   if (d.diffuse) {
     if (!s.warm && interleaved_steps == 0) st.lattice->clear();
     st.lattice->set_source(st.source);
-    lbl::Convergence c = st.lattice->converge(s.tolerance, s.max_steps, s.check_every, request.progress);
+    lbl::Convergence c =
+        st.lattice->converge(s.tolerance, s.max_steps, s.check_every, request.progress);
     queue.finish();
     st.diffused = true;
     st.diffusion = diffusion_key(s);
     last_steps_ = interleaved_steps + c.steps;
-    plan_stage(result.plan, "diffuse").reason += c.converged ? "; converged in " + std::to_string(c.steps) + " steps" +
-                                          (interleaved_steps ? " after the march" : "")
-                                    : "; stopped at the step bound after " + std::to_string(c.steps) +
-                                          " steps (change " + short_number(c.change) + ")";
+    plan_stage(result.plan, "diffuse").reason +=
+        c.converged ? "; converged in " + std::to_string(c.steps) + " steps" +
+                          (interleaved_steps ? " after the march" : "")
+                    : "; stopped at the step bound after " + std::to_string(c.steps) +
+                          " steps (change " + short_number(c.change) + ")";
     clock.stop("diffuse");
     if (s.measure) {
       double step_ms = st.lattice->time_steps(16), copy_ms = st.lattice->time_copy(16);
-      plan_stage(result.plan, "bandwidth").reason = "lattice step " + short_number(step_ms) + " ms = " + short_number(st.lattice->step_bytes() / step_ms / 1e6) +
-                         " GB/s; STREAM-like copy " + short_number(copy_ms) + " ms = " +
-                         short_number(st.lattice->copy_bytes() / copy_ms / 1e6) + " GB/s";
+      plan_stage(result.plan, "bandwidth").reason =
+          "lattice step " + short_number(step_ms) +
+          " ms = " + short_number(st.lattice->step_bytes() / step_ms / 1e6) +
+          " GB/s; STREAM-like copy " + short_number(copy_ms) +
+          " ms = " + short_number(st.lattice->copy_bytes() / copy_ms / 1e6) + " GB/s";
       clock.stop("bandwidth");
     }
   }

@@ -5,7 +5,8 @@
 //            Gaussian-smoothed) and grad n (pipelines/lbl/volume)
 //   march    light rays from every light deposit the power they scatter per voxel, bending by
 //            the ray equation where n varies (kernels/lbl/march.cl)
-//   diffuse  lattice-Boltzmann diffusion of the deposit (global or in blocks), to convergence, warm-started
+//   diffuse  lattice-Boltzmann diffusion of the deposit (global or in blocks), to convergence,
+//   warm-started
 //            from the last state (pipelines/lbl/lattice, kernels/lbl/lattice.cl)
 //   view     per pixel, the eye ray (refracted where n varies) gathers the deposit (single term)
 //            and the lattice's scattered power (multiple term) (kernels/lbl/view.cl)
@@ -29,9 +30,9 @@
 #include <memory>
 #include <optional>
 
+#include "pipelines/cost.hpp"
 #include "pipelines/lbl/lattice.hpp"
 #include "pipelines/lbl/volume.hpp"
-#include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 #include "pipelines/settings_table.hpp"
 #include "pipelines/surface/surface_pipeline.hpp"
@@ -77,7 +78,7 @@ class LblPipeline : public Pipeline {
 
  private:
   gpu::Gpu& gpu_;
-  std::unique_ptr<lbl::State> state_;  // what the last frame left: volume, deposit, lattice
+  std::unique_ptr<lbl::State> state_;         // what the last frame left: volume, deposit, lattice
   std::unique_ptr<SurfacePipeline> surface_;  // the surface term (shadowed Blinn-Phong)
   RenderRequest surface_request(const RenderRequest& request);
   int last_steps_ = 0;

@@ -53,11 +53,13 @@ double smooth_step(double e0, double e1, double x) {
 
 }  // namespace
 
-RaySet light_rays(const std::vector<Light>& lights, const Volume& v, double per_voxel, int max_side) {
+RaySet light_rays(const std::vector<Light>& lights, const Volume& v, double per_voxel,
+                  int max_side) {
   const Vec3 size = Vec3{double(v.nx), double(v.ny), double(v.nz)} * v.voxel;
   const Vec3 centre = v.origin + size * 0.5;
   const double radius = 0.5 * length(size);
-  const int side = std::clamp(static_cast<int>(std::ceil(per_voxel * 2 * radius / v.voxel)), 2, max_side);
+  const int side =
+      std::clamp(static_cast<int>(std::ceil(per_voxel * 2 * radius / v.voxel)), 2, max_side);
   RaySet set;
   for (const Light& l : lights) {
     Vec3 power = l.color * l.intensity;
@@ -80,7 +82,8 @@ RaySet light_rays(const std::vector<Light>& lights, const Volume& v, double per_
     basis(axis, u, w);
     double cos_max = dist > radius ? std::sqrt(1 - (radius / dist) * (radius / dist)) : -1.0;
     double solid_angle = 2 * kPi * (1 - cos_max) / (double(side) * side);
-    double cos_outer = std::cos(l.outer_deg * kPi / 180), cos_inner = std::cos(l.inner_deg * kPi / 180);
+    double cos_outer = std::cos(l.outer_deg * kPi / 180),
+           cos_inner = std::cos(l.inner_deg * kPi / 180);
     for (int j = 0; j < side; ++j)
       for (int i = 0; i < side; ++i) {
         double r, phi;
@@ -110,7 +113,8 @@ std::vector<float> eikonal_trace(gpu::ClContext& cl, const ClVolume& v, const Ra
                                  double step, int steps) {
   std::vector<float> out(size_t(3) * steps * rays.count());
   cl::Buffer ray_buf = upload(cl, rays.rays);
-  cl::Buffer out_buf(cl.context(), CL_MEM_WRITE_ONLY, std::max<size_t>(out.size(), 1) * sizeof(float));
+  cl::Buffer out_buf(cl.context(), CL_MEM_WRITE_ONLY,
+                     std::max<size_t>(out.size(), 1) * sizeof(float));
   cl::Kernel k(cl.program(kProgram), "eikonal_trace");
   gpu::set_args(k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.n, v.grad, ray_buf, rays.count(),
                 float(step), steps, out_buf);

@@ -25,7 +25,8 @@ struct RaySet {
 // volume (the whole sphere when the light is inside it), each carrying intensity x its solid
 // angle (x the spot's smooth cone factor). Rays start at the light (or the plane); the march
 // moves them to where they enter the grid.
-RaySet light_rays(const std::vector<Light>& lights, const Volume& v, double per_voxel, int max_side);
+RaySet light_rays(const std::vector<Light>& lights, const Volume& v, double per_voxel,
+                  int max_side);
 
 // Adds the power each ray scatters in each voxel to `deposit` (3 floats per voxel). `bend`:
 // follow the ray equation in steps of `step` scene units; otherwise cross voxels exactly.

@@ -30,7 +30,8 @@ void to_json(nlohmann::json& j, const LblSlabResult& r) {
 }
 
 LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSlabOptions& o) {
-  check(std::isfinite(p.tau), "tau", "the lbl solver needs a finite slab (the lattice has a node per layer)");
+  check(std::isfinite(p.tau), "tau",
+        "the lbl solver needs a finite slab (the lattice has a node per layer)");
   check(p.tau > 0 && p.tau <= 1000, "tau", "must be in (0, 1000] for the lbl solver");
   check(p.albedo >= 0 && p.albedo <= 1, "albedo", "must be in [0, 1]");
   check(p.g > -1 && p.g < 1, "g", "must be in (-1, 1)");

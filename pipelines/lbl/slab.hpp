@@ -32,6 +32,7 @@ void to_json(nlohmann::json& j, const LblSlabResult& r);
 
 // Throws ValidationError for parameters out of range or that the lattice does not model (an
 // infinite slab, ior != 1).
-LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& params, const LblSlabOptions& options = {});
+LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& params,
+                           const LblSlabOptions& options = {});
 
 }  // namespace scatter::lbl

@@ -8,7 +8,9 @@
 namespace scatter::lbl {
 namespace {
 
-int round_up(int v, int block) { return (v + block - 1) / block * block; }
+int round_up(int v, int block) {
+  return (v + block - 1) / block * block;
+}
 
 // One pass of a 1D Gaussian along `axis` with clamped edges.
 std::vector<float> blur_axis(const Volume& v, const std::vector<float>& in, int axis,
@@ -98,7 +100,8 @@ LatticeCoefficients lattice_coefficients(const Volume& v, double g) {
   c.ny = v.ny;
   c.nz = v.nz;
   for (auto* a : {&c.pt, &c.ps, &c.w, &c.pt_diag, &c.ps_diag, &c.w_diag}) a->resize(3 * v.count());
-  auto fill = [&](double length, std::vector<float>& pt_out, std::vector<float>& ps_out, std::vector<float>& w_out) {
+  auto fill = [&](double length, std::vector<float>& pt_out, std::vector<float>& ps_out,
+                  std::vector<float>& w_out) {
     for (size_t i = 0; i < pt_out.size(); ++i) {
       double ss = v.sigma_s[i], sa = v.sigma_t[i] - ss;
       double ssr = (1 - g) * ss, str = ssr + sa;

@@ -23,7 +23,8 @@ struct Tally {
 void hg_scatter(double g, std::mt19937_64& rng, double d[3]) {
   std::uniform_real_distribution<double> u(0, 1);
   double xi = u(rng), cos_t;
-  if (std::abs(g) < 1e-3) cos_t = 1 - 2 * xi;
+  if (std::abs(g) < 1e-3)
+    cos_t = 1 - 2 * xi;
   else {
     double s = (1 - g * g) / (1 - g + 2 * g * xi);
     cos_t = (1 + g * g - s * s) / (2 * g);
@@ -35,8 +36,10 @@ void hg_scatter(double g, std::mt19937_64& rng, double d[3]) {
   double uu[3] = {d[1] * t[2] - d[2] * t[1], d[2] * t[0] - d[0] * t[2], d[0] * t[1] - d[1] * t[0]};
   double n = std::sqrt(uu[0] * uu[0] + uu[1] * uu[1] + uu[2] * uu[2]);
   for (double& x : uu) x /= n;
-  double v[3] = {d[1] * uu[2] - d[2] * uu[1], d[2] * uu[0] - d[0] * uu[2], d[0] * uu[1] - d[1] * uu[0]};
-  for (int i = 0; i < 3; ++i) d[i] = cos_t * d[i] + sin_t * (std::cos(phi) * uu[i] + std::sin(phi) * v[i]);
+  double v[3] = {d[1] * uu[2] - d[2] * uu[1], d[2] * uu[0] - d[0] * uu[2],
+                 d[0] * uu[1] - d[1] * uu[0]};
+  for (int i = 0; i < 3; ++i)
+    d[i] = cos_t * d[i] + sin_t * (std::cos(phi) * uu[i] + std::sin(phi) * v[i]);
 }
 
 void trace(const BeamParams& p, long long photons, uint64_t seed, Tally& t) {
@@ -90,17 +93,20 @@ std::vector<BeamRow> beam_spread(const BeamParams& p) {
   if (!(p.length > 0 && p.length <= 1e6)) throw ValidationError("--length", "must be in (0, 1e6]");
   if (p.bins < 1 || p.bins > 1000) throw ValidationError("--bins", "must be in [1, 1000]");
   if (!(p.cone > 0 && p.cone <= kPi)) throw ValidationError("--cone", "must be in (0, pi]");
-  if (p.photons < 1 || p.photons > 10'000'000'000LL) throw ValidationError("--photons", "must be in [1, 1e10]");
+  if (p.photons < 1 || p.photons > 10'000'000'000LL)
+    throw ValidationError("--photons", "must be in [1, 1e10]");
   const int threads = p.threads > 0 ? p.threads : std::max(1u, std::thread::hardware_concurrency());
   // Transverse range: a few model widths at the far end (no shift), at least a few mean free paths.
   const double theta2 = mean_square_angle(p.g);
   double wmax = std::sqrt(blur_width2(theta2, p.b * p.length, p.length, p.a / p.b, 0.0));
   const double half_width = std::max(4 * wmax, 5 / (p.a + p.b));
-  std::vector<Tally> tallies(threads, Tally{std::vector<double>(size_t(p.bins) * kTransverseBins, 0.0), half_width});
+  std::vector<Tally> tallies(
+      threads, Tally{std::vector<double>(size_t(p.bins) * kTransverseBins, 0.0), half_width});
   std::vector<std::thread> pool;
   for (int t = 0; t < threads; ++t) {
     long long share = p.photons / threads + (t < p.photons % threads ? 1 : 0);
-    pool.emplace_back(trace, std::cref(p), share, uint64_t(p.seed) * 7919 + t, std::ref(tallies[t]));
+    pool.emplace_back(trace, std::cref(p), share, uint64_t(p.seed) * 7919 + t,
+                      std::ref(tallies[t]));
   }
   for (auto& th : pool) th.join();
   std::vector<BeamRow> rows;
@@ -120,15 +126,19 @@ std::vector<BeamRow> beam_spread(const BeamParams& p) {
     }
     r.fwhm_mc = fwhm(smooth.data(), kTransverseBins, 2 * half_width / kTransverseBins);
     r.fwhm_model = k * std::sqrt(blur_width2(theta2, p.b * r.distance, r.distance, p.a / p.b, 8.0));
-    r.fwhm_model_noshift = k * std::sqrt(blur_width2(theta2, p.b * r.distance, r.distance, p.a / p.b, 0.0));
+    r.fwhm_model_noshift =
+        k * std::sqrt(blur_width2(theta2, p.b * r.distance, r.distance, p.a / p.b, 0.0));
     rows.push_back(r);
   }
   return rows;
 }
 
 void to_json(nlohmann::json& j, const BeamRow& r) {
-  j = {{"distance", r.distance}, {"events", r.events}, {"fwhm_mc", r.fwhm_mc},
-       {"fwhm_model", r.fwhm_model}, {"fwhm_model_noshift", r.fwhm_model_noshift}};
+  j = {{"distance", r.distance},
+       {"events", r.events},
+       {"fwhm_mc", r.fwhm_mc},
+       {"fwhm_model", r.fwhm_model},
+       {"fwhm_model_noshift", r.fwhm_model_noshift}};
 }
 
 }  // namespace scatter::psf

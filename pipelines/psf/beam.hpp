@@ -6,29 +6,28 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
-
 #include <nlohmann/json.hpp>
+#include <vector>
 
 namespace scatter::psf {
 
 struct BeamParams {
-  double b = 0.1;          // scattering coefficient (per unit length)
-  double a = 0.0003;       // absorption coefficient
+  double b = 0.1;     // scattering coefficient (per unit length)
+  double a = 0.0003;  // absorption coefficient
   double g = 0.9;
-  double length = 200;     // the beam is followed to this distance along its axis
-  int bins = 20;           // distance bins
-  double cone = 0.2;       // radians: the events tallied travel within this angle of the axis
+  double length = 200;  // the beam is followed to this distance along its axis
+  int bins = 20;        // distance bins
+  double cone = 0.2;    // radians: the events tallied travel within this angle of the axis
   long long photons = 1'000'000;
   uint32_t seed = 1;
-  int threads = 0;         // 0: hardware concurrency
+  int threads = 0;  // 0: hardware concurrency
 };
 
 struct BeamRow {
-  double distance = 0;       // the bin's centre
-  double events = 0;         // tallied weight in the bin
-  double fwhm_mc = 0;        // of the transverse profile; 0 when too few events
-  double fwhm_model = 0;     // 2 sqrt(2 ln 2) w, w from equation 18 with the 8/b shift
+  double distance = 0;    // the bin's centre
+  double events = 0;      // tallied weight in the bin
+  double fwhm_mc = 0;     // of the transverse profile; 0 when too few events
+  double fwhm_model = 0;  // 2 sqrt(2 ln 2) w, w from equation 18 with the 8/b shift
   double fwhm_model_noshift = 0;
 };
 

@@ -14,10 +14,13 @@ double ms_since(std::chrono::steady_clock::time_point t) {
 }
 
 cl::Buffer float4_buffer(gpu::ClContext& cl, size_t voxels) {
-  return cl::Buffer(cl.context(), CL_MEM_READ_WRITE, std::max<size_t>(voxels, 1) * sizeof(cl_float4));
+  return cl::Buffer(cl.context(), CL_MEM_READ_WRITE,
+                    std::max<size_t>(voxels, 1) * sizeof(cl_float4));
 }
 
-cl::NDRange range(int nx, int ny, int nz) { return cl::NDRange(size_t(nx), size_t(ny), size_t(nz)); }
+cl::NDRange range(int nx, int ny, int nz) {
+  return cl::NDRange(size_t(nx), size_t(ny), size_t(nz));
+}
 
 }  // namespace
 
@@ -40,14 +43,17 @@ std::vector<cl_int4> pyramid_layout(int nx, int ny, int nz) {
   return out;
 }
 
-Pyramid build_pyramid(gpu::ClContext& cl, const cl::Buffer& level0, int nx, int ny, int nz, float voxel) {
+Pyramid build_pyramid(gpu::ClContext& cl, const cl::Buffer& level0, int nx, int ny, int nz,
+                      float voxel) {
   Pyramid p;
   p.layout = pyramid_layout(nx, ny, nz);
   const cl_int4& top = p.layout.back();
   p.voxels = size_t(top.s[0]) + size_t(top.s[1]) * top.s[2] * top.s[3];
   p.data = float4_buffer(cl, p.voxels);
   auto& queue = cl.queue();
-  auto bytes = [](const cl_int4& l) { return size_t(l.s[1]) * l.s[2] * l.s[3] * sizeof(cl_float4); };
+  auto bytes = [](const cl_int4& l) {
+    return size_t(l.s[1]) * l.s[2] * l.s[3] * sizeof(cl_float4);
+  };
   queue.enqueueCopyBuffer(level0, p.data, 0, 0, bytes(p.layout[0]));
   cl::Kernel down(program(cl), "downsample_tent"), blur(program(cl), "blur_axis");
   cl::Buffer prev = level0;
@@ -58,27 +64,30 @@ Pyramid build_pyramid(gpu::ClContext& cl, const cl::Buffer& level0, int nx, int 
     gpu::set_args(down, prev, f.s[1], f.s[2], f.s[3], a, c.s[1], c.s[2], c.s[3]);
     queue.enqueueNDRangeKernel(down, cl::NullRange, range(c.s[1], c.s[2], c.s[3]));
     std::vector<float> taps = gaussian_taps(level_sigma(static_cast<int>(k)));
-    cl::Buffer tap_buf(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, taps.size() * sizeof(float),
-                       taps.data());
+    cl::Buffer tap_buf(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                       taps.size() * sizeof(float), taps.data());
     for (int axis = 0; axis < 3; ++axis) {
-      gpu::set_args(blur, a, c.s[1], c.s[2], c.s[3], axis, tap_buf, static_cast<int>(taps.size()) - 1, b);
+      gpu::set_args(blur, a, c.s[1], c.s[2], c.s[3], axis, tap_buf,
+                    static_cast<int>(taps.size()) - 1, b);
       queue.enqueueNDRangeKernel(blur, cl::NullRange, range(c.s[1], c.s[2], c.s[3]));
       std::swap(a, b);
     }
-    queue.enqueueCopyBuffer(a, p.data, 0, size_t(c.s[0]) * sizeof(cl_float4), n * sizeof(cl_float4));
+    queue.enqueueCopyBuffer(a, p.data, 0, size_t(c.s[0]) * sizeof(cl_float4),
+                            n * sizeof(cl_float4));
     prev = a;
   }
   for (size_t k = 0; k < p.layout.size(); ++k)
     p.width.push_back(static_cast<float>(level_width(static_cast<int>(k)) * voxel));
   p.levels = cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
                         p.layout.size() * sizeof(cl_int4), p.layout.data());
-  p.widths = cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, p.width.size() * sizeof(float),
-                        p.width.data());
+  p.widths = cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                        p.width.size() * sizeof(float), p.width.data());
   queue.finish();
   return p;
 }
 
-LightVolume build_light_volume(gpu::ClContext& cl, const ClMedium& medium, const cl::Buffer& lights, int light) {
+LightVolume build_light_volume(gpu::ClContext& cl, const ClMedium& medium, const cl::Buffer& lights,
+                               int light) {
   auto start = std::chrono::steady_clock::now();
   LightVolume v;
   const size_t n = size_t(medium.nx) * medium.ny * medium.nz;

@@ -26,10 +26,13 @@ double simpson_0_pi(F f, int steps) {
 }  // namespace
 
 double mean_square_angle(double g) {
-  return 2 * kPi * simpson_0_pi([&](double t) { return t * t * hg(std::cos(t), g) * std::sin(t); }, 20000);
+  return 2 * kPi *
+         simpson_0_pi([&](double t) { return t * t * hg(std::cos(t), g) * std::sin(t); }, 20000);
 }
 
-double curvature_alpha(double g) { return 1.0 / (4.0 * (1.0 - g)); }
+double curvature_alpha(double g) {
+  return 1.0 / (4.0 * (1.0 - g));
+}
 
 double blur_width2(double theta2, double ell, double S, double a_over_b, double shift) {
   if (ell <= shift || S <= 0) return 0.0;
@@ -45,11 +48,13 @@ double pms_stretch(double ell) {
 
 double pms_norm(double g, double ell, int steps) {
   double k = pms_stretch(ell);
-  return 2 * kPi * simpson_0_pi([&](double t) { return hg(std::cos(t / k), g) * std::sin(t); }, steps);
+  return 2 * kPi *
+         simpson_0_pi([&](double t) { return hg(std::cos(t / k), g) * std::sin(t); }, steps);
 }
 
 PmsTable pms_table(double g, int entries, double ell_min, double ell_max) {
-  if (entries < 2 || !(ell_min > 0) || !(ell_max > ell_min)) throw std::invalid_argument("pms_table range");
+  if (entries < 2 || !(ell_min > 0) || !(ell_max > ell_min))
+    throw std::invalid_argument("pms_table range");
   PmsTable t;
   t.g = g;
   t.log_min = std::log(ell_min);
@@ -75,7 +80,9 @@ double pms(const PmsTable& table, double ell, double theta) {
   return hg(std::cos(theta / pms_stretch(ell)), table.g) * table.inv_norm_at(ell);
 }
 
-double level_width(int level) { return level <= 0 ? 0.0 : kLevelWidth * std::ldexp(1.0, level); }
+double level_width(int level) {
+  return level <= 0 ? 0.0 : kLevelWidth * std::ldexp(1.0, level);
+}
 
 double stored_width(int level) {
   if (level <= 0) return 0.0;

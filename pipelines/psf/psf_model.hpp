@@ -30,8 +30,8 @@ double blur_width2(double theta2, double ell, double S, double a_over_b, double 
 // N(l) = int P(theta / k) d omega so that P_MS integrates to one over the sphere.
 struct PmsTable {
   double g = 0;
-  double log_min = 0, log_max = 0;  // ln(l) range covered; outside, the end values
-  std::vector<float> inv_norm;      // 1 / N(l) at log-spaced l
+  double log_min = 0, log_max = 0;       // ln(l) range covered; outside, the end values
+  std::vector<float> inv_norm;           // 1 / N(l) at log-spaced l
   double inv_norm_at(double ell) const;  // linear in ln(l)
 };
 PmsTable pms_table(double g, int entries = 256, double ell_min = 1e-3, double ell_max = 1e4);

@@ -53,28 +53,35 @@ void PsfPipeline::check_memory(const Scene& scene) {
   const double need = per_light * std::max<size_t>(scene.lights.size(), 1) + n * 24;
   const gpu::ClDeviceInfo& info = gpu_.cl().info();
   const double have = 0.75 * double(info.global_memory);
-  auto mib = [](double b) { return std::to_string(static_cast<long long>(b / (1 << 20))) + " MiB"; };
-  if ((info.global_memory > 0 && need > have) || (info.max_alloc > 0 && pyramid > double(info.max_alloc)))
-    throw ValidationError("scene.voxels", "the psf pipeline needs up to " + mib(need) + " of device memory for " +
-                                        std::to_string(scene.voxels) + " voxels and " +
-                                        std::to_string(scene.lights.size()) + " lights (a light pyramid up to " +
-                                        mib(pyramid) + "); the device offers " + mib(have) + " (largest buffer " +
-                                        mib(double(info.max_alloc)) + "): use fewer voxels or lights");
+  auto mib = [](double b) {
+    return std::to_string(static_cast<long long>(b / (1 << 20))) + " MiB";
+  };
+  if ((info.global_memory > 0 && need > have) ||
+      (info.max_alloc > 0 && pyramid > double(info.max_alloc)))
+    throw ValidationError(
+        "scene.voxels",
+        "the psf pipeline needs up to " + mib(need) + " of device memory for " +
+            std::to_string(scene.voxels) + " voxels and " + std::to_string(scene.lights.size()) +
+            " lights (a light pyramid up to " + mib(pyramid) + "); the device offers " + mib(have) +
+            " (largest buffer " + mib(double(info.max_alloc)) + "): use fewer voxels or lights");
 }
 
-Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, const PsfSettings& s, bool held,
-                            double thickness, const std::string& thickness_note) const {
+Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, const PsfSettings& s,
+                            bool held, double thickness, const std::string& thickness_note) const {
   Plan p{name(), request.terms, {}};
-  p.stages.push_back({"voxelize", !held, held ? "the medium is the one already held (camera or lights changed)"
-                                              : std::to_string(scene.voxels) + " voxels on the long side"});
+  p.stages.push_back({"voxelize", !held,
+                      held ? "the medium is the one already held (camera or lights changed)"
+                           : std::to_string(scene.voxels) + " voxels on the long side"});
   const bool multiple = request.terms != Terms::Single;
   const bool thin = thickness < s.thin;
   int changed = 0;
-  for (const auto& key : light_keys(scene)) changed += held && !s.rebuild && medium_.lights.count(key) ? 0 : 1;
+  for (const auto& key : light_keys(scene))
+    changed += held && !s.rebuild && medium_.lights.count(key) ? 0 : 1;
   const int n = static_cast<int>(scene.lights.size());
   std::string lights = std::to_string(changed) + " of " + std::to_string(n) + " lights";
   p.stages.push_back({"light_volume", changed > 0,
-                      changed ? lights + " new or changed: transmittance, scattering events and length towards the light per voxel"
+                      changed ? lights + " new or changed: transmittance, scattering events and "
+                                         "length towards the light per voxel"
                               : "every light's volume is held (camera-only change)"});
   const bool need_pyramid = multiple && !thin;
   p.stages.push_back({"pyramid", need_pyramid && changed > 0,
@@ -83,19 +90,25 @@ Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, co
                                     : "every light's pyramid is reused (camera-only change)"});
   p.stages.push_back({"march_single", request.terms != Terms::Multiple,
                       request.terms == Terms::Multiple ? "single term not requested"
-                                                       : "sub-steps of " + short_number(s.step) + " voxels, light volume trilinear"});
+                                                       : "sub-steps of " + short_number(s.step) +
+                                                             " voxels, light volume trilinear"});
   std::string ms_reason;
-  if (!multiple) ms_reason = "multiple term not requested";
+  if (!multiple)
+    ms_reason = "multiple term not requested";
   else if (thin)
-    ms_reason = "optically thin (scattering thickness " + short_number(thickness) + thickness_note + " < " +
-                short_number(s.thin) + "): multiple scattering is negligible";
+    ms_reason = "optically thin (scattering thickness " + short_number(thickness) + thickness_note +
+                " < " + short_number(s.thin) + "): multiple scattering is negligible";
   else
     ms_reason = "pyramid lookups at the equation-18 width, every " + short_number(s.spacing) +
                 " projected blur width; attenuation " +
-                (s.atten == 0 ? "over the whole path (paper)" : s.atten == 1 ? "of the view segment" : "by absorption only");
+                (s.atten == 0   ? "over the whole path (paper)"
+                 : s.atten == 1 ? "of the view segment"
+                                : "by absorption only");
   p.stages.push_back({"march_multiple", multiple && !thin, ms_reason});
   if (scene.medium.ior != 1.0)
-    p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " + short_number(scene.medium.ior) + ")"});
+    p.stages.push_back(
+        {"boundary", false,
+         "refraction and Fresnel are neglected (ior " + short_number(scene.medium.ior) + ")"});
   p.stages.push_back({"readback", true, "linear RGB to the host"});
   return p;
 }
@@ -111,8 +124,10 @@ Plan PsfPipeline::plan(const Scene& scene, const RenderRequest& request) {
   Vec3 size = box.size();
   const double longest = std::max({size.x, size.y, size.z});
   const double voxel = longest / scene.voxels;
-  const double ms = std::max({scene.medium.sigma_s.x, scene.medium.sigma_s.y, scene.medium.sigma_s.z});
-  return make_plan(scene, request, s, false, ms * voxel * (scene.voxels + 2), " estimated at density 1");
+  const double ms =
+      std::max({scene.medium.sigma_s.x, scene.medium.sigma_s.y, scene.medium.sigma_s.z});
+  return make_plan(scene, request, s, false, ms * voxel * (scene.voxels + 2),
+                   " estimated at density 1");
 }
 
 RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& request) {
@@ -158,21 +173,24 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
   const int w = scene.width, h = scene.height;
   const size_t floats = size_t(w) * h * 3;
   std::vector<float> zeros(floats, 0.f);
-  cl::Buffer out(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float), zeros.data());
+  cl::Buffer out(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float),
+                 zeros.data());
   const bool thin = thickness_ < s.thin;
-  const int terms = (request.terms != Terms::Multiple ? 1 : 0) | (request.terms != Terms::Single && !thin ? 2 : 0);
+  const int terms = (request.terms != Terms::Multiple ? 1 : 0) |
+                    (request.terms != Terms::Single && !thin ? 2 : 0);
   const float g = static_cast<float>(scene.medium.g);
   const float theta2 = static_cast<float>(psf::mean_square_angle(scene.medium.g));
   const float alpha = static_cast<float>(psf::curvature_alpha(scene.medium.g));
   cl::Kernel k(psf::program(cl), "psf_march");
   for (size_t i = 0; i < keys.size() && terms; ++i) {
     const psf::LightVolume& v = medium_.lights.at(keys[i]);
-    gpu::set_args(k, m.origin, m.voxel, m.nx, m.ny, m.nz, m.sigma_s, m.sigma_t, lights, static_cast<int>(i), g,
-                  camera, w, h, static_cast<float>(s.step), terms, v.l0, v.path, v.tau, v.pyramid.data,
-                  v.pyramid.levels, v.pyramid.widths, static_cast<int>(v.pyramid.layout.size()), medium_.pms_buf,
-                  static_cast<int>(medium_.pms.inv_norm.size()), static_cast<float>(medium_.pms.log_min),
-                  static_cast<float>(medium_.pms.log_max), theta2, alpha, static_cast<float>(s.shift), s.atten,
-                  static_cast<float>(s.spacing), out);
+    gpu::set_args(
+        k, m.origin, m.voxel, m.nx, m.ny, m.nz, m.sigma_s, m.sigma_t, lights, static_cast<int>(i),
+        g, camera, w, h, static_cast<float>(s.step), terms, v.l0, v.path, v.tau, v.pyramid.data,
+        v.pyramid.levels, v.pyramid.widths, static_cast<int>(v.pyramid.layout.size()),
+        medium_.pms_buf, static_cast<int>(medium_.pms.inv_norm.size()),
+        static_cast<float>(medium_.pms.log_min), static_cast<float>(medium_.pms.log_max), theta2,
+        alpha, static_cast<float>(s.shift), s.atten, static_cast<float>(s.spacing), out);
     queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
     if (request.progress) {
       queue.finish();

@@ -10,8 +10,9 @@
 // shift (the width formula's shift in scattering events, the paper's 8), atten (0 Algorithm 2's
 // weight exp(-(c/b) l) over the whole path, 1 extinction over the view segment only, 2 (default)
 // absorption only over the view segment, as equation 11's action: see kernels/psf/march.cl and
-// docs/BENCHMARKS.md for the measurements behind the default), thin (optical thickness below which the multiple term is skipped, 0.05),
-// rebuild (1: drop the kept light volumes first, as if every light had moved; for benchmarks).
+// docs/BENCHMARKS.md for the measurements behind the default), thin (optical thickness below which
+// the multiple term is skipped, 0.05), rebuild (1: drop the kept light volumes first, as if every
+// light had moved; for benchmarks).
 #pragma once
 
 #include <map>

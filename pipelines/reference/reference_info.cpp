@@ -6,14 +6,17 @@ namespace scatter {
 
 const SettingsTable<ReferenceSettings>& reference_settings() {
   static const SettingsTable<ReferenceSettings> table(
-      "reference",
-      {setting("spp", &ReferenceSettings::spp, 3, 1 << 20, frame(),
-               "samples per pixel (one colour channel per sample: 3 for a colour)"),
-       setting("step", &ReferenceSettings::step, 1e-3, 4, frame(), "the single-scatter marcher's sub-step, in voxels"),
-       setting("seed", &ReferenceSettings::seed, 0, 1 << 30, frame(), "random seed of the Monte Carlo estimates"),
-       setting("max_depth", &ReferenceSettings::max_depth, 1, 1 << 20, frame(), "scattering events per path, at most"),
-       flag("mc", &ReferenceSettings::mc, frame(),
-            "1: the single term by Monte Carlo (next-event estimation at the first vertex) instead of marching")});
+      "reference", {setting("spp", &ReferenceSettings::spp, 3, 1 << 20, frame(),
+                            "samples per pixel (one colour channel per sample: 3 for a colour)"),
+                    setting("step", &ReferenceSettings::step, 1e-3, 4, frame(),
+                            "the single-scatter marcher's sub-step, in voxels"),
+                    setting("seed", &ReferenceSettings::seed, 0, 1 << 30, frame(),
+                            "random seed of the Monte Carlo estimates"),
+                    setting("max_depth", &ReferenceSettings::max_depth, 1, 1 << 20, frame(),
+                            "scattering events per path, at most"),
+                    flag("mc", &ReferenceSettings::mc, frame(),
+                         "1: the single term by Monte Carlo (next-event estimation at the first "
+                         "vertex) instead of marching")});
   return table;
 }
 
@@ -22,18 +25,22 @@ ReferenceSettings ReferenceSettings::read(const Settings& settings) {
 }
 
 const PipelineInfo& reference_info() {
-  static const PipelineInfo info = describe<ReferencePipeline>(reference_settings(), {
-      .summary = "ground truth in OpenCL: a deterministic single-scatter marcher and a volumetric path tracer "
-                 "for all orders; Fresnel and refraction at the mesh when ior != 1",
-      .method = "docs/pipelines/reference.md",
-      .terms = {Terms::Single, Terms::Multiple, Terms::All},
-      // The marcher's single term is the interactive one; all orders take the path tracer 16-170 s a
-      // frame on a 2-core CPU.
-      .default_terms = Terms::Single,
-      .qualities = {{"draft", {{"step", 0.5}}}, {"normal", {}}, {"high", {{"step", 0.125}}}}});
+  static const PipelineInfo info = describe<ReferencePipeline>(
+      reference_settings(),
+      {.summary = "ground truth in OpenCL: a deterministic single-scatter marcher and a volumetric "
+                  "path tracer "
+                  "for all orders; Fresnel and refraction at the mesh when ior != 1",
+       .method = "docs/pipelines/reference.md",
+       .terms = {Terms::Single, Terms::Multiple, Terms::All},
+       // The marcher's single term is the interactive one; all orders take the path tracer 16-170 s
+       // a frame on a 2-core CPU.
+       .default_terms = Terms::Single,
+       .qualities = {{"draft", {{"step", 0.5}}}, {"normal", {}}, {"high", {{"step", 0.125}}}}});
   return info;
 }
 
-const PipelineInfo& ReferencePipeline::info() const { return reference_info(); }
+const PipelineInfo& ReferencePipeline::info() const {
+  return reference_info();
+}
 
 }  // namespace scatter

@@ -19,7 +19,9 @@ std::vector<std::string> program(const char* file) {
   return p;
 }
 
-bool marches(const ReferenceSettings& s, Terms terms) { return terms == Terms::Single && !s.mc; }
+bool marches(const ReferenceSettings& s, Terms terms) {
+  return terms == Terms::Single && !s.mc;
+}
 
 // Mean and standard error of the mean from per-sample sums; sample s went to channel s mod 3, so
 // channel c has its own count.
@@ -43,21 +45,24 @@ Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
   Plan p{name(), request.terms, {}};
   p.stages.push_back({"voxelize", true, std::to_string(scene.voxels) + " voxels on the long side"});
   if (scene.medium.ior != 1.0)
-    p.stages.push_back({"boundary", true, "ior " + std::to_string(scene.medium.ior) +
-                                              ": BVH over the mesh for Fresnel and refraction; "
-                                              "shadow rays are not refracted (approximate)"});
+    p.stages.push_back({"boundary", true,
+                        "ior " + std::to_string(scene.medium.ior) +
+                            ": BVH over the mesh for Fresnel and refraction; "
+                            "shadow rays are not refracted (approximate)"});
   else
     p.stages.push_back({"boundary", false, "index matched (ior 1): no reflection or refraction"});
   p.stages.push_back({"upload", true, "medium, per-brick majorants (8^3 voxels), lights, camera"});
   if (marches(s, request.terms)) {
-    p.stages.push_back({"march", true, "deterministic single scattering, step " +
-                                           std::to_string(s.step) + " voxels"});
-    p.stages.push_back({"trace", false, "the single term is marched, not sampled (mc=1 samples it)"});
+    p.stages.push_back(
+        {"march", true,
+         "deterministic single scattering, step " + std::to_string(s.step) + " voxels"});
+    p.stages.push_back(
+        {"trace", false, "the single term is marched, not sampled (mc=1 samples it)"});
   } else {
     p.stages.push_back({"march", false, "Monte Carlo estimates this term"});
-    p.stages.push_back({"trace", true, std::to_string(s.spp) + " samples per pixel, " +
-                                           (request.terms == Terms::Single ? "first vertex only"
-                                                                          : "all orders")});
+    p.stages.push_back({"trace", true,
+                        std::to_string(s.spp) + " samples per pixel, " +
+                            (request.terms == Terms::Single ? "first vertex only" : "all orders")});
   }
   p.stages.push_back({"readback", true, "mean and standard error"});
   return p;
@@ -80,9 +85,11 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   gpu::ClContext& cl = gpu_.cl();
   cl::Buffer bvh_bounds = upload(cl, bvh.bounds);
   cl::Buffer bvh_tris = upload(cl, bvh.triangles);
-  cl::Buffer bvh_links(cl.context(), CL_MEM_READ_ONLY, std::max<size_t>(bvh.links.size(), 1) * sizeof(int32_t));
+  cl::Buffer bvh_links(cl.context(), CL_MEM_READ_ONLY,
+                       std::max<size_t>(bvh.links.size(), 1) * sizeof(int32_t));
   if (!bvh.links.empty())
-    cl.queue().enqueueWriteBuffer(bvh_links, CL_TRUE, 0, bvh.links.size() * sizeof(int32_t), bvh.links.data());
+    cl.queue().enqueueWriteBuffer(bvh_links, CL_TRUE, 0, bvh.links.size() * sizeof(int32_t),
+                                  bvh.links.data());
   const float ior = static_cast<float>(scene.medium.ior);
   ClMedium medium = upload_medium(cl, grid);
   cl::Buffer lights = upload(cl, pack_lights(scene.lights));
@@ -112,8 +119,10 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   }
 
   std::vector<float> zeros(floats, 0.f);
-  cl::Buffer sum(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float), zeros.data());
-  cl::Buffer sum_sq(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float), zeros.data());
+  cl::Buffer sum(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float),
+                 zeros.data());
+  cl::Buffer sum_sq(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float),
+                    zeros.data());
   cl::Kernel k(cl.program(program("kernels/reference/path.cl")), "path_trace");
   int terms = request.terms == Terms::Single ? 1 : (request.terms == Terms::Multiple ? 2 : 3);
   // Progressive passes of a few samples keep each launch short and let callers see progress.

@@ -32,7 +32,8 @@ void to_json(nlohmann::json& j, const SlabResult& r) {
 }
 
 SlabResult run_reference_slab(gpu::ClContext& cl, const SlabParams& p) {
-  check((p.tau > 0 && p.tau <= 1e6) || (std::isinf(p.tau) && p.tau > 0), "tau", "must be in (0, 1e6] or inf");
+  check((p.tau > 0 && p.tau <= 1e6) || (std::isinf(p.tau) && p.tau > 0), "tau",
+        "must be in (0, 1e6] or inf");
   check(p.albedo >= 0 && p.albedo <= 1, "albedo", "must be in [0, 1]");
   check(p.g > -1 && p.g < 1, "g", "must be in (-1, 1)");
   check(p.mu0 > 0 && p.mu0 <= 1, "mu0", "must be in (0, 1]");

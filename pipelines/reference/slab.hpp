@@ -3,7 +3,6 @@
 #pragma once
 
 #include <limits>
-
 #include <nlohmann/json.hpp>
 
 #include "gpu/cl_context.hpp"

@@ -18,7 +18,8 @@ namespace scatter::single_detail {
 constexpr double kCutoff = 3.0;  // Gaussians end at 3 sigma
 
 inline size_t thread_count(size_t n) {
-  return std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<size_t>(1, n / 64));
+  return std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()),
+                          std::max<size_t>(1, n / 64));
 }
 
 // Runs f(begin, end, thread) over [0, n) on `threads` threads; an exception in one is rethrown
@@ -44,8 +45,9 @@ void parallel_for(size_t n, F&& f, size_t threads = 0) {
 
 // The channel-mean extinction of voxel v.
 inline double extinction(const VoxelGrid& g, size_t v) {
-  return (g.sigma_s[3 * v] + g.sigma_a[3 * v] + g.sigma_s[3 * v + 1] + g.sigma_a[3 * v + 1] + g.sigma_s[3 * v + 2] +
-          g.sigma_a[3 * v + 2]) / 3.0;
+  return (g.sigma_s[3 * v] + g.sigma_a[3 * v] + g.sigma_s[3 * v + 1] + g.sigma_a[3 * v + 1] +
+          g.sigma_s[3 * v + 2] + g.sigma_a[3 * v + 2]) /
+         3.0;
 }
 
 // The voxel holding p (clamped to the grid).
@@ -60,10 +62,14 @@ struct Box {
   int i0, i1, j0, j1, k0, k1;
 };
 inline Box support(const VoxelGrid& g, const Vec3& p, double R) {
-  auto lo = [&](double x, double o) { return std::max(0, int(std::floor((x - R - o) / g.voxel - 0.5))); };
-  auto hi = [&](double x, double o, int n) { return std::min(n - 1, int(std::ceil((x + R - o) / g.voxel - 0.5))); };
-  return {lo(p.x, g.origin.x), hi(p.x, g.origin.x, g.nx), lo(p.y, g.origin.y), hi(p.y, g.origin.y, g.ny),
-          lo(p.z, g.origin.z), hi(p.z, g.origin.z, g.nz)};
+  auto lo = [&](double x, double o) {
+    return std::max(0, int(std::floor((x - R - o) / g.voxel - 0.5)));
+  };
+  auto hi = [&](double x, double o, int n) {
+    return std::min(n - 1, int(std::ceil((x + R - o) / g.voxel - 0.5)));
+  };
+  return {lo(p.x, g.origin.x),       hi(p.x, g.origin.x, g.nx), lo(p.y, g.origin.y),
+          hi(p.y, g.origin.y, g.ny), lo(p.z, g.origin.z),       hi(p.z, g.origin.z, g.nz)};
 }
 
 template <class F>
@@ -80,7 +86,6 @@ void for_support(const VoxelGrid& g, const Vec3& p, double s, F&& f) {
       }
 }
 
-
 // Step 4 of the bake: each sample's Gaussian weight, normalised so that the Gaussians sum to one
 // over the medium and all but the outermost of the `shell` layers (`layer`: 0 medium, d the d-th
 // shell layer, 255 outside), the coverage statistics, and each sample's sigma_s (the weighted
@@ -89,9 +94,11 @@ void for_support(const VoxelGrid& g, const Vec3& p, double s, F&& f) {
 // an extinction jump above `ratio` (<= 1: none) into two pieces clipped by the interface plane;
 // fills bake.plane (4 per piece, n . x <= d; zeros for an unclipped one) and returns the number
 // of samples split (bake.count grows by as many).
-int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double ratio, SingleBake& bake);
+int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double ratio,
+                   SingleBake& bake);
 
-void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell, const SingleBakeParams& p,
-                    SingleBake& bake, const std::function<void(double)>& report);
+void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell,
+                    const SingleBakeParams& p, SingleBake& bake,
+                    const std::function<void(double)>& report);
 
 }  // namespace scatter::single_detail

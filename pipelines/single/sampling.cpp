@@ -13,7 +13,8 @@ namespace {
 class HashGrid {
  public:
   HashGrid(const std::vector<Vec3>& points, double cell) : cell_(cell) {
-    for (size_t i = 0; i < points.size(); ++i) cells_[key(points[i])].push_back(static_cast<int>(i));
+    for (size_t i = 0; i < points.size(); ++i)
+      cells_[key(points[i])].push_back(static_cast<int>(i));
   }
   template <class F>
   void near(const Vec3& p, F&& f) const {
@@ -29,7 +30,8 @@ class HashGrid {
 
  private:
   std::tuple<int64_t, int64_t, int64_t> coords(const Vec3& p) const {
-    return {int64_t(std::floor(p.x / cell_)), int64_t(std::floor(p.y / cell_)), int64_t(std::floor(p.z / cell_))};
+    return {int64_t(std::floor(p.x / cell_)), int64_t(std::floor(p.y / cell_)),
+            int64_t(std::floor(p.z / cell_))};
   }
   static uint64_t pack(int64_t x, int64_t y, int64_t z) {
     auto u = [](int64_t v) { return uint64_t(v + (1 << 20)) & 0x1fffff; };
@@ -45,14 +47,17 @@ class HashGrid {
 
 }  // namespace
 
-EliminationResult eliminate_samples(const std::vector<Vec3>& candidates, const std::vector<float>& q,
-                                    double volume, int target, const std::function<void(double)>& progress) {
+EliminationResult eliminate_samples(const std::vector<Vec3>& candidates,
+                                    const std::vector<float>& q, double volume, int target,
+                                    const std::function<void(double)>& progress) {
   const int m = static_cast<int>(candidates.size());
-  if (target <= 0) throw std::invalid_argument("sample elimination: the target count must be positive");
+  if (target <= 0)
+    throw std::invalid_argument("sample elimination: the target count must be positive");
   if (target > m)
-    throw std::invalid_argument("sample elimination: " + std::to_string(target) + " samples wanted from " +
-                                std::to_string(m) + " candidates");
-  if (q.size() != candidates.size()) throw std::invalid_argument("sample elimination: one radius per candidate");
+    throw std::invalid_argument("sample elimination: " + std::to_string(target) +
+                                " samples wanted from " + std::to_string(m) + " candidates");
+  if (q.size() != candidates.size())
+    throw std::invalid_argument("sample elimination: one radius per candidate");
   EliminationResult result;
   // Largest Poisson radius for `target` points in 3D (Yuksel's r_max, from the densest packing),
   // and his lower clamp r_min (weight limiting), which keeps very close pairs from dominating.
@@ -72,7 +77,9 @@ EliminationResult eliminate_samples(const std::vector<Vec3>& candidates, const s
       double scale = 0.5 * (q[i] + q[j]);
       double d = length(candidates[i] - candidates[j]) / scale;
       if (d >= 2 * r_max) return;
-      d = std::max(d, 2 * r_min);  // Yuksel's weight limiting: distances below d_min = 2 r_min count as d_min
+      d = std::max(
+          d,
+          2 * r_min);  // Yuksel's weight limiting: distances below d_min = 2 r_min count as d_min
       float w = static_cast<float>(std::pow(1 - d / (2 * r_max), 8));
       neighbours[i].push_back({j, w});
       weight[i] += w;
@@ -110,7 +117,8 @@ double min_normalized_distance(const std::vector<Vec3>& points, const std::vecto
   for (const Vec3& p : points) box.add(p);
   // A cell of roughly two points on average finds every nearest pair within its 27 neighbours
   // often enough; fall back to growing the cell until some pair is found.
-  double cell = std::cbrt(std::max(1e-30, box.size().x * box.size().y * box.size().z) / points.size()) * 2;
+  double cell =
+      std::cbrt(std::max(1e-30, box.size().x * box.size().y * box.size().z) / points.size()) * 2;
   const float q_max = *std::max_element(q.begin(), q.end());
   for (;; cell *= 2) {
     HashGrid grid(points, cell);
@@ -118,7 +126,8 @@ double min_normalized_distance(const std::vector<Vec3>& points, const std::vecto
     for (size_t i = 0; i < points.size(); ++i)
       grid.near(points[i], [&](int j) {
         if (size_t(j) <= i) return;
-        best = std::min(best, length(points[i] - points[size_t(j)]) / (0.5 * (q[i] + q[size_t(j)])));
+        best =
+            std::min(best, length(points[i] - points[size_t(j)]) / (0.5 * (q[i] + q[size_t(j)])));
       });
     // Any pair closer than cell / q_max lies in neighbouring cells, so `best` is exact then.
     if (best * q_max <= cell) return best;

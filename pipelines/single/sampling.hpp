@@ -16,16 +16,16 @@
 namespace scatter {
 
 struct EliminationResult {
-  std::vector<int> kept;     // indices into the candidates, `target` of them
-  double base_radius = 0;    // r, in normalised units (world distance / mean q)
+  std::vector<int> kept;   // indices into the candidates, `target` of them
+  double base_radius = 0;  // r, in normalised units (world distance / mean q)
 };
 
 // `q` has one relative radius per candidate (all 1 for uniform spacing); `volume` is the region's
 // volume in normalised units (sum of dV / q^3). Throws std::invalid_argument if target exceeds the
 // candidates or is not positive.
 // `progress` (optional) hears the fraction done now and then, and may throw to stop the work.
-EliminationResult eliminate_samples(const std::vector<Vec3>& candidates, const std::vector<float>& q,
-                                    double volume, int target,
+EliminationResult eliminate_samples(const std::vector<Vec3>& candidates,
+                                    const std::vector<float>& q, double volume, int target,
                                     const std::function<void(double)>& progress = {});
 
 // Smallest normalised distance between two kept samples: |a - b| / ((q_a + q_b) / 2).

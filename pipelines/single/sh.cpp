@@ -7,10 +7,12 @@
 namespace scatter {
 
 void sh_basis(const Vec3& d, int bands, float* out) {
-  if (bands < 1 || bands > kMaxShBands) throw std::invalid_argument("sh_basis: bands must be in [1, 8]");
-  // Real SH without the Condon-Shortley phase: Y_l^0 = K P_l(z); for m > 0 sqrt(2) K P~_l^m(z) Re((x+iy)^m),
-  // for m < 0 the same with Im; P~_l^m = P_l^m / sin^m(theta), a polynomial in z by the usual
-  // recurrences; index l^2 + l + m. Equal to the textbook constants (0.2821, 0.4886 y, ...).
+  if (bands < 1 || bands > kMaxShBands)
+    throw std::invalid_argument("sh_basis: bands must be in [1, 8]");
+  // Real SH without the Condon-Shortley phase: Y_l^0 = K P_l(z); for m > 0 sqrt(2) K P~_l^m(z)
+  // Re((x+iy)^m), for m < 0 the same with Im; P~_l^m = P_l^m / sin^m(theta), a polynomial in z by
+  // the usual recurrences; index l^2 + l + m. Equal to the textbook constants (0.2821, 0.4886 y,
+  // ...).
   const double x = d.x, y = d.y, z = d.z;
   double c[kMaxShBands], sn[kMaxShBands];  // Re and Im of (x + iy)^m
   c[0] = 1;
@@ -66,7 +68,8 @@ std::vector<Vec3> sphere_directions(int n) {
   return dirs;
 }
 
-std::vector<float> sh_project(const std::vector<Vec3>& dirs, const std::vector<float>& f, int bands) {
+std::vector<float> sh_project(const std::vector<Vec3>& dirs, const std::vector<float>& f,
+                              int bands) {
   if (f.size() != dirs.size()) throw std::invalid_argument("sh_project: one value per direction");
   const int n = sh_count(bands);
   std::vector<double> acc(n, 0.0);

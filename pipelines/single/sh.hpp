@@ -10,7 +10,9 @@
 namespace scatter {
 
 constexpr int kMaxShBands = 8;  // bands l = 0..7: 64 coefficients (the paper: up to 25)
-constexpr int sh_count(int bands) { return bands * bands; }
+constexpr int sh_count(int bands) {
+  return bands * bands;
+}
 
 // Y_i(d) for i < bands^2, d a unit vector.
 void sh_basis(const Vec3& d, int bands, float* out);
@@ -21,7 +23,9 @@ float sh_eval(const float* c, const Vec3& d, int bands);
 // a solid angle of 4 pi / n.
 std::vector<Vec3> sphere_directions(int n);
 
-// Projects f sampled at `dirs` (equal solid angles) onto the basis: c_i = 4 pi / n sum_k f_k Y_i(d_k).
-std::vector<float> sh_project(const std::vector<Vec3>& dirs, const std::vector<float>& f, int bands);
+// Projects f sampled at `dirs` (equal solid angles) onto the basis: c_i = 4 pi / n sum_k f_k
+// Y_i(d_k).
+std::vector<float> sh_project(const std::vector<Vec3>& dirs, const std::vector<float>& f,
+                              int bands);
 
 }  // namespace scatter

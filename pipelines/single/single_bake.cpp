@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 #include <random>
 #include <stdexcept>
-#include <mutex>
 #include <thread>
 
 #include "pipelines/common/cl_library.hpp"
@@ -20,29 +20,34 @@ using namespace single_detail;
 namespace {
 
 const std::vector<std::string> kProgram = with_cl_library({"kernels/single/bake.cl"});
-constexpr float kDepthClamp = 20;   // exp(-20) ~ 2e-9: deeper is dark either way
+constexpr float kDepthClamp = 20;  // exp(-20) ~ 2e-9: deeper is dark either way
 constexpr int kMaxShell = kSingleGridMargin - 1;
 
 }  // namespace
 
 void SingleBakeParams::check() const {
-  if (split > 0 && split < 1.5) throw ValidationError("settings.split", "split must be 0 (off) or at least 1.5");
+  if (split > 0 && split < 1.5)
+    throw ValidationError("settings.split", "split must be 0 (off) or at least 1.5");
   // The elimination keeps ~25 neighbours per candidate: bound the candidates' memory (~1 GB).
   if (double(samples) * candidates > 2.5e6)
-    throw ValidationError("settings.candidates", "samples x candidates must not exceed 2500000 (got " +
-                                                     std::to_string(samples) + " x " + std::to_string(candidates) + ")");
+    throw ValidationError("settings.candidates",
+                          "samples x candidates must not exceed 2500000 (got " +
+                              std::to_string(samples) + " x " + std::to_string(candidates) + ")");
 }
 
-std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<Vec3>& dirs,
+std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid,
+                                const std::vector<Vec3>& dirs,
                                 const std::function<void(double)>& progress) {
   const size_t voxels = grid.count();
   std::vector<float> sigma(voxels);
   for (size_t v = 0; v < voxels; ++v)
-    sigma[v] = (grid.sigma_s[3 * v] + grid.sigma_a[3 * v] + grid.sigma_s[3 * v + 1] + grid.sigma_a[3 * v + 1] +
-                grid.sigma_s[3 * v + 2] + grid.sigma_a[3 * v + 2]) / 3;
+    sigma[v] = (grid.sigma_s[3 * v] + grid.sigma_a[3 * v] + grid.sigma_s[3 * v + 1] +
+                grid.sigma_a[3 * v + 1] + grid.sigma_s[3 * v + 2] + grid.sigma_a[3 * v + 2]) /
+               3;
   cl::Buffer d_sigma = upload(cl, sigma);
   std::vector<float> zeros(3 * voxels, 0.f);
-  cl::Buffer moment(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, zeros.size() * sizeof(float), zeros.data());
+  cl::Buffer moment(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
+                    zeros.size() * sizeof(float), zeros.data());
   cl::Kernel kernel(cl.program(kProgram), "sweep_slice");
   const int dims[3] = {grid.nx, grid.ny, grid.nz};
   const double d_omega = 4 * std::numbers::pi / double(dirs.size());
@@ -54,12 +59,15 @@ std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const
       for (const Vec3& w : dirs) {
         double c[3] = {w.x, w.y, w.z};
         double a = std::abs(c[axis]);
-        int major = std::abs(c[0]) >= std::abs(c[1]) && std::abs(c[0]) >= std::abs(c[2]) ? 0
-                    : (std::abs(c[1]) >= std::abs(c[2]) ? 1 : 2);
+        int major = std::abs(c[0]) >= std::abs(c[1]) && std::abs(c[0]) >= std::abs(c[2])
+                        ? 0
+                        : (std::abs(c[1]) >= std::abs(c[2]) ? 1 : 2);
         if (major != axis || (c[axis] >= 0 ? 1 : -1) != sign) continue;
         int ua = axis == 0 ? 1 : 0, va = axis == 2 ? 1 : 2;
-        params.insert(params.end(), {float(c[ua] / a), float(c[va] / a), float(grid.voxel / a), 0.f});
-        moments.insert(moments.end(), {float(w.x * d_omega), float(w.y * d_omega), float(w.z * d_omega), 0.f});
+        params.insert(params.end(),
+                      {float(c[ua] / a), float(c[va] / a), float(grid.voxel / a), 0.f});
+        moments.insert(moments.end(),
+                       {float(w.x * d_omega), float(w.y * d_omega), float(w.z * d_omega), 0.f});
       }
       if (params.empty()) {
         ++groups_done;
@@ -77,8 +85,8 @@ std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const
         int k = sign > 0 ? n - 1 - step : step;
         cl::Buffer& prev = (step % 2) ? a : b;
         cl::Buffer& cur = (step % 2) ? b : a;
-        gpu::set_args(kernel, d_sigma, grid.nx, grid.ny, grid.nz, axis, k, k + sign, d_params, d_moments,
-                      count, prev, cur, moment);
+        gpu::set_args(kernel, d_sigma, grid.nx, grid.ny, grid.nz, axis, k, k + sign, d_params,
+                      d_moments, count, prev, cur, moment);
         queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(nu), size_t(nv)));
       }
       queue.finish();
@@ -102,7 +110,8 @@ std::vector<float> divergence(const VoxelGrid& g, const std::vector<float>& T) {
       for (int i = 0; i < g.nx; ++i) {
         size_t v = g.index(i, j, k);
         if (g.occupancy[v] <= 0) continue;
-        double div = (at(i + 1, j, k, 0) - at(i - 1, j, k, 0)) + (at(i, j + 1, k, 1) - at(i, j - 1, k, 1)) +
+        double div = (at(i + 1, j, k, 0) - at(i - 1, j, k, 0)) +
+                     (at(i, j + 1, k, 1) - at(i, j - 1, k, 1)) +
                      (at(i, j, k + 1, 2) - at(i, j, k - 1, 2));
         rho[v] = static_cast<float>(std::abs(div) / (2 * g.voxel));
       }
@@ -124,8 +133,9 @@ struct DepthTables {
   }
 };
 
-std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid, const DepthTables& tables,
-                                 const std::vector<float>& positions, int n) {
+std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid,
+                                 const DepthTables& tables, const std::vector<float>& positions,
+                                 int n) {
   const int samples = static_cast<int>(positions.size() / 3);
   std::vector<float> out(size_t(samples) * n * 3);
   if (samples == 0) return out;
@@ -135,7 +145,8 @@ std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid, cons
   cl::Buffer d_out(cl.context(), CL_MEM_WRITE_ONLY, out.size() * sizeof(float));
   cl::Kernel k(cl.program(kProgram), "sample_depths");
   cl_float3 origin{{float(grid.origin.x), float(grid.origin.y), float(grid.origin.z)}};
-  gpu::set_args(k, origin, float(grid.voxel), grid.nx, grid.ny, grid.nz, d_sigma, d_pos, samples, d_dirs, n, d_out);
+  gpu::set_args(k, origin, float(grid.voxel), grid.nx, grid.ny, grid.nz, d_sigma, d_pos, samples,
+                d_dirs, n, d_out);
   cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(samples), size_t(n)));
   cl.queue().enqueueReadBuffer(d_out, CL_TRUE, 0, out.size() * sizeof(float), out.data());
   return out;
@@ -143,9 +154,11 @@ std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid, cons
 
 }  // namespace
 
-std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<float>& positions,
+std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid,
+                                 const std::vector<float>& positions,
                                  const std::vector<Vec3>& dirs) {
-  return sample_depths(cl, grid, DepthTables(cl, grid, dirs), positions, static_cast<int>(dirs.size()));
+  return sample_depths(cl, grid, DepthTables(cl, grid, dirs), positions,
+                       static_cast<int>(dirs.size()));
 }
 
 double gaussian_sum(const SingleBake& b, const Vec3& p) {
@@ -154,7 +167,9 @@ double gaussian_sum(const SingleBake& b, const Vec3& p) {
     Vec3 c{b.position[3 * i], b.position[3 * i + 1], b.position[3 * i + 2]};
     double sg = b.sigma[i], r2 = dot(p - c, p - c);
     if (r2 > kCutoff * kCutoff * sg * sg) continue;
-    if (!b.plane.empty() && dot(Vec3{b.plane[4 * i], b.plane[4 * i + 1], b.plane[4 * i + 2]}, p) > b.plane[4 * i + 3]) continue;
+    if (!b.plane.empty() &&
+        dot(Vec3{b.plane[4 * i], b.plane[4 * i + 1], b.plane[4 * i + 2]}, p) > b.plane[4 * i + 3])
+      continue;
     s += b.weight[i] * std::exp(-r2 / (2 * sg * sg));
   }
   return s;
@@ -220,11 +235,14 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
     if (g.occupancy[v] > 0) medium_rho.push_back(rho[v]);
   if (medium_rho.empty()) throw ValidationError("scene", "the object holds no medium to sample");
   std::sort(medium_rho.begin(), medium_rho.end());
-  const double lo = medium_rho[medium_rho.size() / 20], hi = medium_rho[medium_rho.size() * 19 / 20];
+  const double lo = medium_rho[medium_rho.size() / 20],
+               hi = medium_rho[medium_rho.size() * 19 / 20];
   const bool constant = !(hi - lo > 1e-6 * std::max(hi, 1e-30));
   std::vector<float> q(voxels, 1.f);
   for (size_t v = 0; v < voxels; ++v)
-    if (!constant) q[v] = static_cast<float>(std::pow(2.0 - 1.5 * std::clamp((rho[v] - lo) / (hi - lo), 0.0, 1.0), p.adapt));
+    if (!constant)
+      q[v] = static_cast<float>(
+          std::pow(2.0 - 1.5 * std::clamp((rho[v] - lo) / (hi - lo), 0.0, 1.0), p.adapt));
 
   // The sampled region: the medium plus a shell of `shell` voxels around it, each shell voxel
   // taking the smallest radius of its neighbours inward. Gaussians centred in the shell keep the
@@ -238,7 +256,8 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
       q_min = std::min(q_min, q[v]);
     }
   const double r_estimate = std::cbrt(medium_volume / (4 * std::sqrt(2.0) * p.samples));
-  const int shell = std::clamp(int(std::ceil(2.5 * p.radius * 2 * r_estimate * q_min / g.voxel)), 1, kMaxShell);
+  const int shell =
+      std::clamp(int(std::ceil(2.5 * p.radius * 2 * r_estimate * q_min / g.voxel)), 1, kMaxShell);
   // anchor: for a shell voxel, a medium voxel it was reached from; its samples read their optical
   // depth there (shifted by the same offset), since from outside a convex surface a grazing light
   // or view direction misses the medium that the Gaussian covers inside.
@@ -254,9 +273,11 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
         for (int i = 0; i < g.nx; ++i) {
           size_t v = g.index(i, j, k);
           if (layer[v] != 255) continue;
-          const int nb[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
+          const int nb[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k},
+                                {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
           for (const auto& n : nb) {
-            if (n[0] < 0 || n[1] < 0 || n[2] < 0 || n[0] >= g.nx || n[1] >= g.ny || n[2] >= g.nz) continue;
+            if (n[0] < 0 || n[1] < 0 || n[2] < 0 || n[0] >= g.nx || n[1] >= g.ny || n[2] >= g.nz)
+              continue;
             size_t u = g.index(n[0], n[1], n[2]);
             if (layer[u] != d - 1) continue;
             if (layer[v] == 255 || q[u] < q[v]) {
@@ -281,15 +302,16 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   for (int c = 0; c < m; ++c) {
     double x = uni(rng) * cdf.back();
-    size_t v = std::min(voxels - 1, size_t(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin()) - 1);
+    size_t v =
+        std::min(voxels - 1, size_t(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin()) - 1);
     int i = int(v % g.nx), j = int((v / g.nx) % g.ny), k = int(v / (size_t(g.nx) * g.ny));
     candidates[c] = g.origin + Vec3{i + uni(rng), j + uni(rng), k + uni(rng)} * g.voxel;
     cq[c] = q[v];
     cvoxel[c] = v;
   }
   report("sampling", 0.2);
-  EliminationResult kept =
-      eliminate_samples(candidates, cq, volume, p.samples, [&](double f) { report("sampling", 0.2 + 0.8 * f); });
+  EliminationResult kept = eliminate_samples(candidates, cq, volume, p.samples,
+                                             [&](double f) { report("sampling", 0.2 + 0.8 * f); });
   bake.count = p.samples;
   bake.position.reserve(3 * size_t(bake.count));
   std::vector<float>& depth_position = bake.depth_at;
@@ -336,7 +358,8 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
             double f = p.sh_depth ? std::min(t, kDepthClamp) : std::exp(-double(t));
             for (int i = 0; i < nc; ++i) acc[c * nc + i] += f * basis[k * nc + i];
           }
-        for (int i = 0; i < 3 * nc; ++i) bake.sh[(first + s) * 3 * nc + i] = static_cast<float>(acc[i] * w);
+        for (int i = 0; i < 3 * nc; ++i)
+          bake.sh[(first + s) * 3 * nc + i] = static_cast<float>(acc[i] * w);
       }
     });
     report("sh", double(last) / n);

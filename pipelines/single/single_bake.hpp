@@ -18,9 +18,9 @@
 //              rescaled (4 passes) so the Gaussians sum to one at the voxel centres inside, then
 //              `weight_fit` (20) least-squares iterations (CGLS) towards the same; a sample whose
 //              Gaussian crosses a jump in the extinction (ratio above `split`, 2; 0 never) becomes
-//              two pieces clipped by the interface plane (single_split.cpp); each sample's (piece's)
-//              sigma_s is the Gaussian-weighted mean of the medium around it on its side, then
-//              `sigma_fit` (8) passes fit the splatted field to the voxels
+//              two pieces clipped by the interface plane (single_split.cpp); each sample's
+//              (piece's) sigma_s is the Gaussian-weighted mean of the medium around it on its side,
+//              then `sigma_fit` (8) passes fit the splatted field to the voxels
 //   sh         exact optical depth per channel from every sample along every direction (DDA),
 //              projected onto `sh_order`^2 real spherical harmonics: of exp(-tau) (the paper, the
 //              default) or of tau itself, clamped to 20, exponentiated when rendering (`sh_depth`
@@ -45,15 +45,17 @@ constexpr int kSingleGridMargin = 4;
 struct SingleBakeParams {
   int directions = 128;
   int samples = 25000;
-  int sh_order = 5;        // bands, 2..8: 4..64 coefficients per channel (the paper: up to 5)
-  bool sh_depth = false;   // project the optical depth (true) or the transmittance (false)
-  double radius = 0.5;     // Gaussian sigma / local spacing
-  int candidates = 5;      // candidates per sample for the elimination
+  int sh_order = 5;            // bands, 2..8: 4..64 coefficients per channel (the paper: up to 5)
+  bool sh_depth = false;       // project the optical depth (true) or the transmittance (false)
+  double radius = 0.5;         // Gaussian sigma / local spacing
+  int candidates = 5;          // candidates per sample for the elimination
   bool density_guide = false;  // sample density also follows |grad sigma_t| inside the medium
-  int weight_fit = 20;         // least-squares (CGLS) iterations refining the weights after the passes
-  double split = 2;            // extinction ratio above which a Gaussian is split at the jump (0: never)
-  int sigma_fit = 8;           // passes fitting each sample's sigma_s so the splatted field matches the voxels
-  double adapt = 0.5;          // relative radius (2 - 1.5 t)^adapt from rho's rank t: 1 the paper's [r/2, 2r], 0 uniform
+  int weight_fit = 20;  // least-squares (CGLS) iterations refining the weights after the passes
+  double split = 2;     // extinction ratio above which a Gaussian is split at the jump (0: never)
+  int sigma_fit =
+      8;  // passes fitting each sample's sigma_s so the splatted field matches the voxels
+  double adapt = 0.5;  // relative radius (2 - 1.5 t)^adapt from rho's rank t: 1 the paper's [r/2,
+                       // 2r], 0 uniform
   uint32_t seed = 1;
   // The rules across settings (split's lower bound, samples x candidates); the settings table
   // (pipelines/single/single_info.cpp) checks each one's range.
@@ -69,9 +71,10 @@ struct SingleBake {
   std::vector<float> sigma;     // Gaussian standard deviation per sample
   std::vector<float> weight;    // Gaussian amplitude per sample
   std::vector<float> sigma_s;   // 3 per sample
-  std::vector<float> plane;     // 4 per sample: it counts where n . x <= d (xyz n, w d); zeros: everywhere
-  int split = 0;                // samples split in two at a jump (count includes the extra pieces)
-  std::vector<float> sh;        // per sample, per channel, sh_order^2 coefficients
+  std::vector<float>
+      plane;      // 4 per sample: it counts where n . x <= d (xyz n, w d); zeros: everywhere
+  int split = 0;  // samples split in two at a jump (count includes the extra pieces)
+  std::vector<float> sh;  // per sample, per channel, sh_order^2 coefficients
   // Sum of the Gaussians at the voxel centres inside: mean and relative standard deviation.
   double coverage_mean = 0, coverage_spread = 0;
   std::vector<StageTime> timings;
@@ -87,13 +90,15 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& grid, const SingleBa
 
 // The pieces, for tests. First moment T per voxel (3 floats) for the given directions.
 // `progress` (optional) hears the fraction of direction groups done.
-std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid, const std::vector<Vec3>& dirs,
+std::vector<float> first_moment(gpu::ClContext& cl, const VoxelGrid& grid,
+                                const std::vector<Vec3>& dirs,
                                 const std::function<void(double)>& progress = {});
 // |div T| per voxel, zero where the voxel holds no medium.
 std::vector<float> divergence(const VoxelGrid& grid, const std::vector<float>& moment);
 // Optical depth per (sample, direction, channel) from the sample to the grid's boundary.
 std::vector<float> sample_depths(gpu::ClContext& cl, const VoxelGrid& grid,
-                                 const std::vector<float>& positions, const std::vector<Vec3>& dirs);
+                                 const std::vector<float>& positions,
+                                 const std::vector<Vec3>& dirs);
 // Sum of the baked Gaussians at p.
 double gaussian_sum(const SingleBake& bake, const Vec3& p);
 

@@ -6,30 +6,38 @@
 
 namespace scatter::single_detail {
 
-void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell, const SingleBakeParams& p,
-                    SingleBake& bake, const std::function<void(double)>& report) {
+void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell,
+                    const SingleBakeParams& p, SingleBake& bake,
+                    const std::function<void(double)>& report) {
   const size_t voxels = g.count();
   // Weights: start from spacing^3 / Gaussian volume, then rescale each weight by the
   //    Gaussian-weighted mean of 1 / (sum of all Gaussians) over the voxel centres of the medium
   //    and all but the outermost shell layer.
   const int n = bake.count;
-  auto pos = [&](int i) { return Vec3{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]}; };
+  auto pos = [&](int i) {
+    return Vec3{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]};
+  };
   bake.weight.resize(n);
   for (int i = 0; i < n; ++i) {
     double spacing = bake.sigma[i] / p.radius;
-    bake.weight[i] = static_cast<float>(std::pow(spacing / bake.sigma[i], 3) / std::pow(2 * std::numbers::pi, 1.5));
+    bake.weight[i] = static_cast<float>(std::pow(spacing / bake.sigma[i], 3) /
+                                        std::pow(2 * std::numbers::pi, 1.5));
   }
   std::vector<double> sum(voxels);
   const size_t threads = thread_count(size_t(n));
   std::vector<std::vector<double>> partial(threads - 1, std::vector<double>(voxels));
   auto accumulate = [&] {
     // Each thread adds its samples into its own array; the arrays are summed after.
-    parallel_for(size_t(n), [&](size_t a, size_t b, size_t t) {
-      std::vector<double>& out = t == 0 ? sum : partial[t - 1];
-      std::fill(out.begin(), out.end(), 0.0);
-      for (size_t i = a; i < b; ++i)
-        for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) { out[v] += bake.weight[i] * e; });
-    }, threads);
+    parallel_for(
+        size_t(n),
+        [&](size_t a, size_t b, size_t t) {
+          std::vector<double>& out = t == 0 ? sum : partial[t - 1];
+          std::fill(out.begin(), out.end(), 0.0);
+          for (size_t i = a; i < b; ++i)
+            for_support(g, pos(int(i)), bake.sigma[i],
+                        [&](size_t v, double e) { out[v] += bake.weight[i] * e; });
+        },
+        threads);
     for (const auto& part : partial)
       for (size_t v = 0; v < voxels; ++v) sum[v] += part[v];
   };
@@ -53,14 +61,19 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
   // pointwise spread of ~9 % after 4 passes, ~6.5 % after 64).
   if (p.weight_fit > 0) {
     auto fitted = [&](size_t v) { return layer[v] < shell; };
-    // out = A x (per voxel), restricted to the fitted voxels (the threads' arrays are accumulate's).
+    // out = A x (per voxel), restricted to the fitted voxels (the threads' arrays are
+    // accumulate's).
     auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {
-      parallel_for(size_t(n), [&](size_t a, size_t b, size_t t) {
-        std::vector<double>& o = t == 0 ? out : partial[t - 1];
-        std::fill(o.begin(), o.end(), 0.0);
-        for (size_t i = a; i < b; ++i)
-          for_support(g, pos(int(i)), bake.sigma[i], [&](size_t v, double e) { o[v] += x[i] * e; });
-      }, threads);
+      parallel_for(
+          size_t(n),
+          [&](size_t a, size_t b, size_t t) {
+            std::vector<double>& o = t == 0 ? out : partial[t - 1];
+            std::fill(o.begin(), o.end(), 0.0);
+            for (size_t i = a; i < b; ++i)
+              for_support(g, pos(int(i)), bake.sigma[i],
+                          [&](size_t v, double e) { o[v] += x[i] * e; });
+          },
+          threads);
       for (const auto& part : partial)
         for (size_t v = 0; v < voxels; ++v) out[v] += part[v];
       for (size_t v = 0; v < voxels; ++v)
@@ -99,7 +112,8 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
       const double next = norm2(s);
       for (int i = 0; i < n; ++i) dir[i] = s[i] + next / gamma * dir[i];
       gamma = next;
-      report(0.8 + 0.15 * (it + 1) / p.weight_fit);  // progress (and a cancel's chance) per iteration
+      report(0.8 +
+             0.15 * (it + 1) / p.weight_fit);  // progress (and a cancel's chance) per iteration
     }
     // A Gaussian with a negative weight would subtract light: keep them non-negative.
     for (int i = 0; i < n; ++i) bake.weight[i] = static_cast<float>(std::max(0.0, w[i]));
@@ -113,8 +127,10 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
       cnt += 1;
     }
   bake.coverage_mean = cnt > 0 ? s1 / cnt : 0;
-  bake.coverage_spread = cnt > 0 ? std::sqrt(std::max(0.0, s2 / cnt - bake.coverage_mean * bake.coverage_mean)) /
-                                       std::max(1e-30, bake.coverage_mean) : 0;
+  bake.coverage_spread =
+      cnt > 0 ? std::sqrt(std::max(0.0, s2 / cnt - bake.coverage_mean * bake.coverage_mean)) /
+                    std::max(1e-30, bake.coverage_mean)
+              : 0;
   // Pieces at jumps (pipelines/single/single_split.cpp); from here on a piece's Gaussian counts
   // only on its side of its plane.
   bake.split = split_at_jumps(g, layer, p.split, bake);
@@ -123,7 +139,8 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
     const float* pl = &bake.plane[4 * size_t(i)];
     const Vec3 nrm{pl[0], pl[1], pl[2]};
     for_support(g, pos(i), bake.sigma[i], [&](size_t v, double e) {
-      const Vec3 x = g.center(int(v % g.nx), int((v / g.nx) % g.ny), int(v / (size_t(g.nx) * g.ny)));
+      const Vec3 x =
+          g.center(int(v % g.nx), int((v / g.nx) % g.ny), int(v / (size_t(g.nx) * g.ny)));
       if (dot(nrm, x) <= pl[3]) f(v, e);
     });
   };
@@ -137,7 +154,8 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
         for (int c = 0; c < 3; ++c) acc[c] += e * g.sigma_s[3 * v + c];
         occ += e * g.occupancy[v];
       });
-      for (int c = 0; c < 3; ++c) bake.sigma_s[3 * i + c] = occ > 0 ? static_cast<float>(acc[c] / occ) : 0.f;
+      for (int c = 0; c < 3; ++c)
+        bake.sigma_s[3 * i + c] = occ > 0 ? static_cast<float>(acc[c] / occ) : 0.f;
     }
   });
   // sigma_fit passes (Landweber iterations) move each sample's sigma_s by the Gaussian-weighted
@@ -151,14 +169,18 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
     std::vector<double> field(3 * voxels);
     std::vector<std::vector<double>> fpart(threads - 1, std::vector<double>(3 * voxels));
     for (int pass = 0; pass < fit_passes; ++pass) {
-      parallel_for(size_t(pieces), [&](size_t a, size_t b, size_t t) {
-        std::vector<double>& out = t == 0 ? field : fpart[t - 1];
-        std::fill(out.begin(), out.end(), 0.0);
-        for (size_t i = a; i < b; ++i)
-          for_piece(int(i), [&](size_t v, double e) {
-            for (int c = 0; c < 3; ++c) out[3 * v + c] += bake.weight[i] * e * bake.sigma_s[3 * i + c];
-          });
-      }, threads);
+      parallel_for(
+          size_t(pieces),
+          [&](size_t a, size_t b, size_t t) {
+            std::vector<double>& out = t == 0 ? field : fpart[t - 1];
+            std::fill(out.begin(), out.end(), 0.0);
+            for (size_t i = a; i < b; ++i)
+              for_piece(int(i), [&](size_t v, double e) {
+                for (int c = 0; c < 3; ++c)
+                  out[3 * v + c] += bake.weight[i] * e * bake.sigma_s[3 * i + c];
+              });
+          },
+          threads);
       for (const auto& part : fpart)
         for (size_t v = 0; v < 3 * voxels; ++v) field[v] += part[v];
       parallel_for(size_t(pieces), [&](size_t a, size_t b, size_t) {
@@ -172,7 +194,8 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
           });
           if (occ > 0)
             for (int c = 0; c < 3; ++c)
-              bake.sigma_s[3 * i + c] = static_cast<float>(std::max(0.0, bake.sigma_s[3 * i + c] + acc[c] / occ));
+              bake.sigma_s[3 * i + c] =
+                  static_cast<float>(std::max(0.0, bake.sigma_s[3 * i + c] + acc[c] / occ));
         }
       });
     }

@@ -20,8 +20,6 @@ namespace {
 // Bump when the bake's results change, so old cache entries are not reused.
 constexpr const char* kSingleBakeVersion = "single-7";
 
-
-
 }  // namespace
 
 // The product's key, from the asset's identity (pipelines/asset_key.hpp) and the settings that
@@ -38,7 +36,8 @@ namespace {
 
 gpu::GlObject storage(const std::vector<float>& data) {
   auto b = gpu::GlObject::create(gpu::GlKind::Buffer);
-  glNamedBufferStorage(b.get(), static_cast<GLsizeiptr>(std::max<size_t>(data.size(), 1) * sizeof(float)),
+  glNamedBufferStorage(b.get(),
+                       static_cast<GLsizeiptr>(std::max<size_t>(data.size(), 1) * sizeof(float)),
                        data.empty() ? nullptr : data.data(), 0);
   return b;
 }
@@ -67,38 +66,46 @@ Plan SinglePipeline::make_plan(const Scene& scene, Terms terms, const SingleSett
                                const std::string& fp) const {
   Plan p{name(), terms, {}};
   const bool same = current_.bake && current_.fingerprint == fp;
-  p.stages.push_back({"voxelize", !same, same ? "the asset is the one already baked"
-                                              : std::to_string(scene.voxels) + " voxels on the long side"});
+  p.stages.push_back({"voxelize", !same,
+                      same ? "the asset is the one already baked"
+                           : std::to_string(scene.voxels) + " voxels on the long side"});
   p.stages.push_back({"bake", !same,
                       same ? "reusing the loaded bake " + current_.key.substr(0, 12)
                            : "looked up by content (voxels + settings); baked on a miss: " +
                                  std::to_string(s.bake.directions) + " directions, " +
                                  std::to_string(s.bake.samples) + " samples, " +
-                                 std::to_string(s.bake.sh_order * s.bake.sh_order) + " SH coefficients of " +
+                                 std::to_string(s.bake.sh_order * s.bake.sh_order) +
+                                 " SH coefficients of " +
                                  (s.bake.sh_depth ? "optical depth" : "transmittance")});
   p.stages.push_back({"depth_peel", true,
-                      s.clip_back ? "four surfaces: the medium along each ray is [1st, 2nd] and [3rd, 4th]"
-                                  : "first surface (the paper's clipping)"});
-  p.stages.push_back({"shade", true, std::to_string(scene.lights.size()) +
-                                         " lights evaluated once per sample, not per fragment" +
-                                         (s.exact_tr ? ": exact optical depths through the voxels (exact_tr)"
-                                                     : ": transmittance from the samples' SH")});
+                      s.clip_back
+                          ? "four surfaces: the medium along each ray is [1st, 2nd] and [3rd, 4th]"
+                          : "first surface (the paper's clipping)"});
+  p.stages.push_back({"shade", true,
+                      std::to_string(scene.lights.size()) +
+                          " lights evaluated once per sample, not per fragment" +
+                          (s.exact_tr ? ": exact optical depths through the voxels (exact_tr)"
+                                      : ": transmittance from the samples' SH")});
   std::string moved;
   if (s.exact_tr && s.tr_gradient)
     moved = s.tr_hessian ? ", moved and stretched by the optical depth's gradient and curvature"
                          : ", moved by the optical depth's gradient";
-  p.stages.push_back({"splat", true, "one Gaussian per sample integrated along each view ray (erf)" + moved});
+  p.stages.push_back(
+      {"splat", true, "one Gaussian per sample integrated along each view ray (erf)" + moved});
   if (scene.medium.ior != 1.0)
-    p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " +
-                                               std::to_string(scene.medium.ior) + ")"});
+    p.stages.push_back(
+        {"boundary", false,
+         "refraction and Fresnel are neglected (ior " + std::to_string(scene.medium.ior) + ")"});
   if (scene.medium.g != 0.0)
-    p.stages.push_back({"phase", true, "Henyey-Greenstein g " + std::to_string(scene.medium.g) +
-                                           " evaluated per sample for its direction to the eye"});
+    p.stages.push_back({"phase", true,
+                        "Henyey-Greenstein g " + std::to_string(scene.medium.g) +
+                            " evaluated per sample for its direction to the eye"});
   p.stages.push_back({"readback", true, "linear RGB to the host"});
   return p;
 }
 
-BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request, const BakeProgress& progress) {
+BakeResult SinglePipeline::bake(const Scene& scene, const RenderRequest& request,
+                                const BakeProgress& progress) {
   SingleSettings s = SingleSettings::read(request.settings);
   return bake(scene, s, product_key(scene, s), progress);
 }
@@ -121,7 +128,8 @@ BakeResult SinglePipeline::bake(const Scene& scene, const SingleSettings& s, con
         product = std::make_shared<SingleBake>(SingleBake::deserialize(**bytes));
         r.cache_hit = true;
       } catch (const std::exception& e) {
-        spdlog::warn("event=bake_product_unreadable key={} problem=\"{}\" outcome=rebake", hex, e.what());
+        spdlog::warn("event=bake_product_unreadable key={} problem=\"{}\" outcome=rebake", hex,
+                     e.what());
       }
     }
     if (!product) {
@@ -158,13 +166,16 @@ void SinglePipeline::upload() {
   sigma_s_ = storage(b.sigma_s);
   sh_ = storage(b.sh);
   sigmas_ = storage(b.sigma);
-  planes_ = storage(b.plane.empty() ? std::vector<float>(size_t(std::max(b.count, 1)) * 4, 0.f) : b.plane);
+  planes_ = storage(b.plane.empty() ? std::vector<float>(size_t(std::max(b.count, 1)) * 4, 0.f)
+                                    : b.plane);
   colors_ = gpu::GlObject::create(gpu::GlKind::Buffer);
-  glNamedBufferStorage(colors_.get(), static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
+  glNamedBufferStorage(colors_.get(),
+                       static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
                        GL_MAP_READ_BIT | GL_DYNAMIC_STORAGE_BIT);
   for (gpu::GlObject* buffer : {&shifts_, &axes_}) {
     *buffer = gpu::GlObject::create(gpu::GlKind::Buffer);
-    glNamedBufferStorage(buffer->get(), static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
+    glNamedBufferStorage(buffer->get(),
+                         static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
                          GL_DYNAMIC_STORAGE_BIT);
   }
   reset_moves();
@@ -176,7 +187,8 @@ void SinglePipeline::reset_moves() {
   glClearNamedBufferData(shifts_.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
   std::vector<float> axes(size_t(std::max(b.count, 1)) * 4, 0.f);
   for (int i = 0; i < b.count; ++i) std::fill_n(&axes[4 * size_t(i)], 4, b.sigma[i]);
-  glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data());
+  glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)),
+                       axes.data());
   current_.moved = false;
 }
 
@@ -184,7 +196,8 @@ std::vector<float> SinglePipeline::read_shaded() const {
   if (!colors_ || !current_.bake) return {};
   gpu_.gl().make_current();
   std::vector<float> out(size_t(current_.bake->count) * 4);
-  glGetNamedBufferSubData(colors_.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(float)), out.data());
+  glGetNamedBufferSubData(colors_.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(float)),
+                          out.data());
   return out;
 }
 
@@ -192,8 +205,10 @@ std::pair<std::vector<float>, std::vector<float>> SinglePipeline::read_moves() c
   if (!shifts_ || !current_.bake) return {};
   gpu_.gl().make_current();
   std::vector<float> shifts(size_t(current_.bake->count) * 4), axes(shifts.size());
-  glGetNamedBufferSubData(shifts_.get(), 0, static_cast<GLsizeiptr>(shifts.size() * sizeof(float)), shifts.data());
-  glGetNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data());
+  glGetNamedBufferSubData(shifts_.get(), 0, static_cast<GLsizeiptr>(shifts.size() * sizeof(float)),
+                          shifts.data());
+  glGetNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)),
+                          axes.data());
   return {shifts, axes};
 }
 
@@ -227,9 +242,12 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   const GLuint dist = distance_program_.get();
   draw_distance(dist, mesh, front, cam.view, cam.projection, eye, Vec3{}, false, 0);
   if (s.clip_back) {
-    draw_distance(dist, mesh, back, cam.view, cam.projection, eye, Vec3{}, false, front.color_texture());
-    draw_distance(dist, mesh, third, cam.view, cam.projection, eye, Vec3{}, false, back.color_texture());
-    draw_distance(dist, mesh, fourth, cam.view, cam.projection, eye, Vec3{}, false, third.color_texture());
+    draw_distance(dist, mesh, back, cam.view, cam.projection, eye, Vec3{}, false,
+                  front.color_texture());
+    draw_distance(dist, mesh, third, cam.view, cam.projection, eye, Vec3{}, false,
+                  back.color_texture());
+    draw_distance(dist, mesh, fourth, cam.view, cam.projection, eye, Vec3{}, false,
+                  third.color_texture());
   }
   glFinish();
   clock.stop("depth_peel");

@@ -11,16 +11,17 @@
 //               (erf), added into a float target
 //
 // Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 0, radius 0.5,
-// candidates 5, density_guide 0, weight_fit 20, split 2, sigma_fit 8, adapt 0.5, seed 1), clip_back (1): clip to the medium's
-// first two intervals along the ray by depth peeling (0: the paper's front-only
-// clipping), and exact_tr (1): sum each sample's optical depth to the eye (every frame) and to
-// every light (when the light appears or moves) through the voxels (kernels/single/shade.cl);
-// 0 reads them from the samples' SH, the paper's method (measured: the SH's 25 coefficients are
-// most of the error on faces and shadows, docs/BENCHMARKS.md). With exact_tr, tr_gradient (1)
-// models the transmittance over each Gaussian as exponential in the position (the gradient of
-// the optical depth by slope-limited differences), which moves and scales the Gaussian, and
-// tr_gradient_max (2) bounds |gradient| x sigma. The term is the single-scattered radiance; the surface, refraction and Fresnel at the
-// boundary are not included (ior is neglected, and the plan says so).
+// candidates 5, density_guide 0, weight_fit 20, split 2, sigma_fit 8, adapt 0.5, seed 1), clip_back
+// (1): clip to the medium's first two intervals along the ray by depth peeling (0: the paper's
+// front-only clipping), and exact_tr (1): sum each sample's optical depth to the eye (every frame)
+// and to every light (when the light appears or moves) through the voxels
+// (kernels/single/shade.cl); 0 reads them from the samples' SH, the paper's method (measured: the
+// SH's 25 coefficients are most of the error on faces and shadows, docs/BENCHMARKS.md). With
+// exact_tr, tr_gradient (1) models the transmittance over each Gaussian as exponential in the
+// position (the gradient of the optical depth by slope-limited differences), which moves and scales
+// the Gaussian, and tr_gradient_max (2) bounds |gradient| x sigma. The term is the single-scattered
+// radiance; the surface, refraction and Fresnel at the boundary are not included (ior is neglected,
+// and the plan says so).
 #pragma once
 
 #include <map>
@@ -59,7 +60,8 @@ class SinglePipeline : public Pipeline {
   ~SinglePipeline() override;
   const PipelineInfo& info() const override;
   Plan plan(const Scene& scene, const RenderRequest& request) override;
-  BakeResult bake(const Scene& scene, const RenderRequest& request, const BakeProgress& progress = {}) override;
+  BakeResult bake(const Scene& scene, const RenderRequest& request,
+                  const BakeProgress& progress = {}) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 
   // The product the last bake() or render() used.
@@ -83,12 +85,14 @@ class SinglePipeline : public Pipeline {
     // exact_tr: transmittance to each light and (tr_gradient) its optical depth's gradient, by
     // the light's place and whether the gradient was computed
     std::map<std::string, std::pair<cl::Buffer, cl::Buffer>> light_tr;
-    int light_passes = 0;                         // light_tr computations so far (tests)
-    bool moved = false;                           // shifts_ / axes_ hold exact_tr's last values
+    int light_passes = 0;  // light_tr computations so far (tests)
+    bool moved = false;    // shifts_ / axes_ hold exact_tr's last values
   };
   // The stages of a frame with settings `s` for the asset whose fingerprint is `fp`.
-  Plan make_plan(const Scene& scene, Terms terms, const SingleSettings& s, const std::string& fp) const;
-  BakeResult bake(const Scene& scene, const SingleSettings& s, const std::string& fp, const BakeProgress& progress);
+  Plan make_plan(const Scene& scene, Terms terms, const SingleSettings& s,
+                 const std::string& fp) const;
+  BakeResult bake(const Scene& scene, const SingleSettings& s, const std::string& fp,
+                  const BakeProgress& progress);
   void upload();
   // The samples' own Gaussians in shifts_ (no move) and axes_ (sigma on every axis).
   void reset_moves();
@@ -102,7 +106,8 @@ class SinglePipeline : public Pipeline {
   Current current_;
   gpu::GlObject distance_program_, shade_program_, splat_program_, empty_vao_;
   gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_, planes_;
-  cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_sigma_s_, cl_plane_, cl_out_, cl_shift_, cl_axes_;
+  cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_sigma_s_, cl_plane_,
+      cl_out_, cl_shift_, cl_axes_;
 };
 
 }  // namespace scatter

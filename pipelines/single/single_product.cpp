@@ -3,8 +3,8 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "pipelines/single/single_bake.hpp"
 #include "pipelines/single/sh.hpp"
+#include "pipelines/single/single_bake.hpp"
 
 namespace scatter {
 namespace {
@@ -39,8 +39,9 @@ class Reader {
   }
   std::vector<float> get_floats(size_t expected) {
     uint64_t n = get<uint64_t>();
-    if (n != expected) throw std::runtime_error("single bake: array of " + std::to_string(n) +
-                                                " floats where " + std::to_string(expected) + " belong");
+    if (n != expected)
+      throw std::runtime_error("single bake: array of " + std::to_string(n) + " floats where " +
+                               std::to_string(expected) + " belong");
     need(n * sizeof(float));
     std::vector<float> v(n);
     std::memcpy(v.data(), s_.data() + at_, n * sizeof(float));
@@ -96,7 +97,8 @@ std::string SingleBake::serialize() const {
 
 SingleBake SingleBake::deserialize(const std::string& bytes) {
   Reader r(bytes);
-  if (r.get<uint32_t>() != kMagic) throw std::runtime_error("single bake: not a single-scattering bake");
+  if (r.get<uint32_t>() != kMagic)
+    throw std::runtime_error("single bake: not a single-scattering bake");
   SingleBake b;
   b.params.directions = r.get<int32_t>();
   b.params.samples = r.get<int32_t>();

@@ -22,10 +22,14 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
     cl_sigma_ = scatter::upload(cl, b.sigma);
     cl_weight_ = scatter::upload(cl, b.weight);
     cl_sigma_s_ = scatter::upload(cl, b.sigma_s);
-    cl_plane_ = scatter::upload(cl, b.plane.empty() ? std::vector<float>(size_t(std::max(b.count, 1)) * 4, 0.f) : b.plane);
-    cl_out_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
-    cl_shift_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
-    cl_axes_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, size_t(std::max(b.count, 1)) * 4 * sizeof(float));
+    cl_plane_ = scatter::upload(
+        cl, b.plane.empty() ? std::vector<float>(size_t(std::max(b.count, 1)) * 4, 0.f) : b.plane);
+    cl_out_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY,
+                         size_t(std::max(b.count, 1)) * 4 * sizeof(float));
+    cl_shift_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY,
+                           size_t(std::max(b.count, 1)) * 4 * sizeof(float));
+    cl_axes_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY,
+                          size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     current_.cl_uploaded = true;
   }
   const std::vector<std::string> program = with_cl_library({"kernels/single/shade.cl"});
@@ -36,7 +40,8 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
   // direction for a directional light, is the key).
   std::map<std::string, std::pair<cl::Buffer, cl::Buffer>> still_used;
   cl::Buffer all(cl.context(), CL_MEM_READ_WRITE, block * std::max<size_t>(scene.lights.size(), 1));
-  cl::Buffer all_grad(cl.context(), CL_MEM_READ_WRITE, 2 * block * std::max<size_t>(scene.lights.size(), 1));
+  cl::Buffer all_grad(cl.context(), CL_MEM_READ_WRITE,
+                      2 * block * std::max<size_t>(scene.lights.size(), 1));
   cl::Kernel per_light(cl.program(program), "light_transmittance");
   for (size_t l = 0; l < scene.lights.size(); ++l) {
     const Light& light = scene.lights[l];
@@ -48,10 +53,13 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
     if (found != current_.light_tr.end()) {
       tr = found->second;
     } else {
-      tr = {cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block), cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 2 * block)};
-      gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_sigma_, cl_plane_,
-                    b.count, lights, static_cast<int>(l), gradient ? 1 : 0, tr.first, tr.second);
-      cl.queue().enqueueNDRangeKernel(per_light, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
+      tr = {cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block),
+            cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 2 * block)};
+      gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_,
+                    cl_sigma_, cl_plane_, b.count, lights, static_cast<int>(l), gradient ? 1 : 0,
+                    tr.first, tr.second);
+      cl.queue().enqueueNDRangeKernel(per_light, cl::NullRange,
+                                      cl::NDRange(size_t(std::max(b.count, 1))));
       ++current_.light_passes;
     }
     cl.queue().enqueueCopyBuffer(tr.first, all, 0, l * block, block);
@@ -62,18 +70,24 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
   cl::Kernel k(cl.program(program), "shade_exact");
   const Vec3& e = scene.camera.position;
   cl_float3 eye{{float(e.x), float(e.y), float(e.z)}};
-  gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_,
-                cl_sigma_s_, cl_plane_, b.count, lights, static_cast<int>(scene.lights.size()), all, all_grad, gradient ? 1 : 0,
-                hessian ? 1 : 0, float(max_gs), float(scene.medium.g), eye, cl_out_, cl_shift_, cl_axes_);
+  gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_position_,
+                cl_sigma_, cl_weight_, cl_sigma_s_, cl_plane_, b.count, lights,
+                static_cast<int>(scene.lights.size()), all, all_grad, gradient ? 1 : 0,
+                hessian ? 1 : 0, float(max_gs), float(scene.medium.g), eye, cl_out_, cl_shift_,
+                cl_axes_);
   cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
-  std::vector<float> out(size_t(b.count) * 4), shift(size_t(b.count) * 4), axes(size_t(b.count) * 4);
+  std::vector<float> out(size_t(b.count) * 4), shift(size_t(b.count) * 4),
+      axes(size_t(b.count) * 4);
   cl.queue().enqueueReadBuffer(cl_out_, CL_TRUE, 0, out.size() * sizeof(float), out.data());
   cl.queue().enqueueReadBuffer(cl_shift_, CL_TRUE, 0, shift.size() * sizeof(float), shift.data());
   cl.queue().enqueueReadBuffer(cl_axes_, CL_TRUE, 0, axes.size() * sizeof(float), axes.data());
   gpu_.gl().make_current();
-  glNamedBufferSubData(colors_.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(float)), out.data());
-  glNamedBufferSubData(shifts_.get(), 0, static_cast<GLsizeiptr>(shift.size() * sizeof(float)), shift.data());
-  glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)), axes.data());
+  glNamedBufferSubData(colors_.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(float)),
+                       out.data());
+  glNamedBufferSubData(shifts_.get(), 0, static_cast<GLsizeiptr>(shift.size() * sizeof(float)),
+                       shift.data());
+  glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)),
+                       axes.data());
 }
 
 }  // namespace scatter

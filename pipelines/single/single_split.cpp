@@ -80,11 +80,14 @@ Split find_split(const VoxelGrid& g, const Vec3& c, double s, double ratio) {
     if (err < best) {
       best = err;
       at = k == 0 ? proj[0].first - g.voxel / 2
-                  : (k == proj.size() ? proj.back().first + g.voxel / 2 : (proj[k - 1].first + proj[k].first) / 2);
+                  : (k == proj.size() ? proj.back().first + g.voxel / 2
+                                      : (proj[k - 1].first + proj[k].first) / 2);
     }
     if (k == proj.size()) break;
-    if (proj[k].second > 0) own_above -= proj[k].second;
-    else other_below -= proj[k].second;
+    if (proj[k].second > 0)
+      own_above -= proj[k].second;
+    else
+      other_below -= proj[k].second;
   }
   if (at <= 0) return out;  // the centre itself would lie on the other side
   // The other side's mass of the Gaussian: too little is not worth a piece.
@@ -102,7 +105,8 @@ Split find_split(const VoxelGrid& g, const Vec3& c, double s, double ratio) {
 
 }  // namespace
 
-int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double ratio, SingleBake& bake) {
+int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double ratio,
+                   SingleBake& bake) {
   const int n = bake.count;
   bake.plane.assign(4 * size_t(n), 0.f);
   if (ratio <= 1) return 0;
@@ -122,10 +126,12 @@ int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double
     Vec3 c{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]};
     const double d = dot(s.n, c) + s.offset;
     // The sample keeps its own side: n . x <= d.
-    std::copy_n(std::array<float, 4>{float(s.n.x), float(s.n.y), float(s.n.z), float(d)}.data(), 4, &bake.plane[4 * size_t(i)]);
+    std::copy_n(std::array<float, 4>{float(s.n.x), float(s.n.y), float(s.n.z), float(d)}.data(), 4,
+                &bake.plane[4 * size_t(i)]);
     // The new piece: -n . x <= -d.
     bake.position.insert(bake.position.end(), {float(c.x), float(c.y), float(c.z)});
-    bake.depth_at.insert(bake.depth_at.end(), {float(s.anchor.x), float(s.anchor.y), float(s.anchor.z)});
+    bake.depth_at.insert(bake.depth_at.end(),
+                         {float(s.anchor.x), float(s.anchor.y), float(s.anchor.z)});
     bake.sigma.push_back(bake.sigma[i]);
     bake.weight.push_back(bake.weight[i]);
     bake.plane.insert(bake.plane.end(), {float(-s.n.x), float(-s.n.y), float(-s.n.z), float(-d)});

@@ -13,8 +13,9 @@ Plan SurfacePipeline::plan(const Scene& scene, const RenderRequest& request) {
   Plan p{name(), request.terms, {}};
   p.stages.push_back({"upload", true, std::to_string(scene.mesh->triangle_count()) + " triangles"});
   p.stages.push_back({"shadow_maps", s.shadows && !scene.lights.empty(),
-                      s.shadows ? std::to_string(s.shadow_size) + "^2 distance map per light"
-                                : "shadows off (settings.shadows 0): every facet facing a light is lit"});
+                      s.shadows
+                          ? std::to_string(s.shadow_size) + "^2 distance map per light"
+                          : "shadows off (settings.shadows 0): every facet facing a light is lit"});
   p.stages.push_back({"raster", true,
                       scene.lights.empty() ? "no lights: the mesh renders black"
                                            : std::to_string(scene.lights.size()) + " lights"});
@@ -26,7 +27,8 @@ RenderResult SurfacePipeline::render(const Scene& scene, const RenderRequest& re
   RenderResult result;
   result.plan = plan(scene, request);
   gpu_.gl().make_current();
-  if (!program_) program_ = gpu::build_program("shaders/surface/mesh.vert", "shaders/surface/blinn_phong.frag");
+  if (!program_)
+    program_ = gpu::build_program("shaders/surface/mesh.vert", "shaders/surface/blinn_phong.frag");
   SurfaceSettings s = SurfaceSettings::read(request.settings);
   StageClock clock(result.timings);
   MeshBuffers mesh(*scene.mesh);
@@ -38,8 +40,7 @@ RenderResult SurfacePipeline::render(const Scene& scene, const RenderRequest& re
   std::vector<std::unique_ptr<RenderTarget>> maps;
   glProgramUniform1i(prog, glGetUniformLocation(prog, "shadowed"), s.shadows ? 1 : 0);
   if (s.shadows) {
-    if (!distance_program_)
-      distance_program_ = build_distance_program();
+    if (!distance_program_) distance_program_ = build_distance_program();
     Aabb b = scene.mesh->bounds();
     // A texel's footprint at the far side of the object, so a lit surface does not shadow itself.
     float bias = static_cast<float>(2.5 * length(b.size()) / s.shadow_size);
@@ -47,30 +48,33 @@ RenderResult SurfacePipeline::render(const Scene& scene, const RenderRequest& re
     for (size_t i = 0; i < scene.lights.size(); ++i) {
       LightView v = light_view(scene.lights[i], scene, "surface");
       maps.push_back(std::make_unique<RenderTarget>(s.shadow_size, s.shadow_size));
-      draw_distance(distance_program_.get(), mesh, *maps.back(), v.view, v.projection, v.origin, v.direction,
-                    v.along_direction, 0, 1e30f);
+      draw_distance(distance_program_.get(), mesh, *maps.back(), v.view, v.projection, v.origin,
+                    v.direction, v.along_direction, 0, 1e30f);
       glBindTextureUnit(static_cast<GLuint>(i), maps.back()->color_texture());
       std::string at = "[";  // (not "[" + ...: gcc 12's -Wrestrict false positive)
       at += std::to_string(i);
       at += "]";
-      glProgramUniform1i(prog, glGetUniformLocation(prog, ("shadow_maps" + at).c_str()), static_cast<int>(i));
+      glProgramUniform1i(prog, glGetUniformLocation(prog, ("shadow_maps" + at).c_str()),
+                         static_cast<int>(i));
       uniform_matrix(prog, "light_matrix" + at, v.projection * v.view);
       uniform3(prog, "shadow_origin" + at, v.origin);
-      glProgramUniform1i(prog, glGetUniformLocation(prog, ("shadow_along" + at).c_str()), v.along_direction ? 1 : 0);
+      glProgramUniform1i(prog, glGetUniformLocation(prog, ("shadow_along" + at).c_str()),
+                         v.along_direction ? 1 : 0);
     }
     glFinish();
     clock.stop("shadow_maps");
   }
 
   CameraMatrices cam = camera_matrices(scene);
-  glProgramUniformMatrix4fv(prog, glGetUniformLocation(prog, "view"), 1, GL_FALSE, cam.view.m.data());
+  glProgramUniformMatrix4fv(prog, glGetUniformLocation(prog, "view"), 1, GL_FALSE,
+                            cam.view.m.data());
   glProgramUniformMatrix4fv(prog, glGetUniformLocation(prog, "projection"), 1, GL_FALSE,
                             cam.projection.m.data());
   const Vec3& e = scene.camera.position;
   glProgramUniform3f(prog, glGetUniformLocation(prog, "eye"), float(e.x), float(e.y), float(e.z));
   const SurfaceMaterial& m = scene.surface;
-  glProgramUniform3f(prog, glGetUniformLocation(prog, "kd"), float(m.diffuse.x),
-                     float(m.diffuse.y), float(m.diffuse.z));
+  glProgramUniform3f(prog, glGetUniformLocation(prog, "kd"), float(m.diffuse.x), float(m.diffuse.y),
+                     float(m.diffuse.z));
   glProgramUniform3f(prog, glGetUniformLocation(prog, "ks"), float(m.specular.x),
                      float(m.specular.y), float(m.specular.z));
   glProgramUniform1f(prog, glGetUniformLocation(prog, "shininess"), float(m.shininess));

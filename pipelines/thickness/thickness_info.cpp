@@ -8,7 +8,8 @@ const SettingsTable<ThicknessSettings>& thickness_settings() {
   static const SettingsTable<ThicknessSettings> table(
       "thickness",
       {setting("steps", &ThicknessSettings::steps, 1, 1024, frame(), "pieces per view segment"),
-       setting("shadow_size", &ThicknessSettings::shadow_size, 64, 8192, frame(), "shadow-map side in texels")});
+       setting("shadow_size", &ThicknessSettings::shadow_size, 64, 8192, frame(),
+               "shadow-map side in texels")});
   return table;
 }
 
@@ -17,18 +18,22 @@ ThicknessSettings ThicknessSettings::read(const Settings& settings) {
 }
 
 const PipelineInfo& thickness_info() {
-  static const PipelineInfo info = describe<ThicknessPipeline>(thickness_settings(), {
-      .summary = "single scattering in a homogeneous medium from a shadow map per light and depth peeling, "
-                 "integrated analytically; no bake, OpenGL",
-      .method = "docs/pipelines/thickness.md (papers/thickness-single-scattering-blog.md)",
-      .terms = {Terms::Single},
-      .default_terms = Terms::Single,
-      .qualities = {{"draft", {{"steps", 12}, {"shadow_size", 512}}},
-                    {"normal", {}},
-                    {"high", {{"steps", 96}, {"shadow_size", 2048}}}}});
+  static const PipelineInfo info = describe<ThicknessPipeline>(
+      thickness_settings(),
+      {.summary = "single scattering in a homogeneous medium from a shadow map per light and depth "
+                  "peeling, "
+                  "integrated analytically; no bake, OpenGL",
+       .method = "docs/pipelines/thickness.md (papers/thickness-single-scattering-blog.md)",
+       .terms = {Terms::Single},
+       .default_terms = Terms::Single,
+       .qualities = {{"draft", {{"steps", 12}, {"shadow_size", 512}}},
+                     {"normal", {}},
+                     {"high", {{"steps", 96}, {"shadow_size", 2048}}}}});
   return info;
 }
 
-const PipelineInfo& ThicknessPipeline::info() const { return thickness_info(); }
+const PipelineInfo& ThicknessPipeline::info() const {
+  return thickness_info();
+}
 
 }  // namespace scatter

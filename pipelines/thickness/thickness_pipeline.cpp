@@ -13,8 +13,9 @@ Plan ThicknessPipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   ThicknessSettings s = ThicknessSettings::read(request.settings);
   if (!scene.medium.density->homogeneous())
-    throw ValidationError("scene.medium.density", "the thickness pipeline needs a homogeneous "
-                                                  "medium (constant density); use reference");
+    throw ValidationError("scene.medium.density",
+                          "the thickness pipeline needs a homogeneous "
+                          "medium (constant density); use reference");
   Plan p{name(), request.terms, {}};
   p.stages.push_back({"bake", false, "homogeneous medium: no optical-depth bake is needed"});
   p.stages.push_back({"shadow_maps", !scene.lights.empty(),
@@ -23,8 +24,9 @@ Plan ThicknessPipeline::plan(const Scene& scene, const RenderRequest& request) {
   p.stages.push_back({"depth_peel", true, "front and second surface along each view ray"});
   p.stages.push_back({"integrate", true, std::to_string(s.steps) + " pieces per view segment"});
   if (scene.medium.ior != 1.0)
-    p.stages.push_back({"boundary", false, "refraction and Fresnel are neglected (ior " +
-                                               std::to_string(scene.medium.ior) + ")"});
+    p.stages.push_back(
+        {"boundary", false,
+         "refraction and Fresnel are neglected (ior " + std::to_string(scene.medium.ior) + ")"});
   p.stages.push_back({"readback", true, "linear RGB to the host"});
   return p;
 }
@@ -36,7 +38,8 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   gpu_.gl().make_current();
   if (!distance_program_) {
     distance_program_ = build_distance_program();
-    integrate_program_ = gpu::build_program("shaders/thickness/integrate.vert", "shaders/thickness/integrate.frag");
+    integrate_program_ =
+        gpu::build_program("shaders/thickness/integrate.vert", "shaders/thickness/integrate.frag");
     empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
   }
   StageClock clock(result.timings);
@@ -61,7 +64,8 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   const Vec3& eye = scene.camera.position;
   RenderTarget front(scene.width, scene.height), back(scene.width, scene.height);
   draw_distance(dist, mesh, front, cam.view, cam.projection, eye, Vec3{}, false, 0);
-  draw_distance(dist, mesh, back, cam.view, cam.projection, eye, Vec3{}, false, front.color_texture());
+  draw_distance(dist, mesh, back, cam.view, cam.projection, eye, Vec3{}, false,
+                front.color_texture());
   glFinish();
   clock.stop("depth_peel");
 

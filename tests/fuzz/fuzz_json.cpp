@@ -1,6 +1,7 @@
 // JSON messages: nlohmann's own fuzzer check (parse -> dump -> parse -> dump is stable), that what
-// the project's parse_json accepts nlohmann's non-throwing parse accepts as the same value, and the message
-// readers that are pure functions today (a lights array, as a WebSocket "lights" message carries).
+// the project's parse_json accepts nlohmann's non-throwing parse accepts as the same value, and the
+// message readers that are pure functions today (a lights array, as a WebSocket "lights" message
+// carries).
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>

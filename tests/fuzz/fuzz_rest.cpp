@@ -21,7 +21,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return o;
   }();
   static scatter::server::SceneLibrary library(64 << 20);
-  // The same bytes as a request target's query string (crashes and sanitizer reports are the finding).
+  // The same bytes as a request target's query string (crashes and sanitizer reports are the
+  // finding).
   (void)scatter::server::parse_query("/api/assets?" + std::string(body));
   nlohmann::json request;
   if (!scatter::fuzz::parse(body, request)) return 0;
@@ -30,7 +31,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     auto spec = scatter::server::Api::read_render_spec(r, request, options, library);
     r.finish();
     scatter::fuzz::check_mesh(*spec.scene->mesh);
-    scatter::server::Api::check_cost(options, spec.pipeline, *spec.scene, spec.terms, spec.settings, false);
+    scatter::server::Api::check_cost(options, spec.pipeline, *spec.scene, spec.terms, spec.settings,
+                                     false);
   } catch (const std::runtime_error&) {
   }
   return 0;

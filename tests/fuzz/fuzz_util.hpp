@@ -18,7 +18,8 @@
 namespace scatter::fuzz {
 
 inline void write(const std::filesystem::path& p, std::string_view bytes) {
-  std::ofstream(p, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  std::ofstream(p, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
 // The unit cube as OBJ.
@@ -33,7 +34,8 @@ inline std::string cube_obj() {
 // a scene.
 inline const std::filesystem::path& assets_dir() {
   static const std::filesystem::path dir = [] {
-    auto d = std::filesystem::temp_directory_path() / ("scatter-fuzz-" + std::to_string(::getpid()));
+    auto d =
+        std::filesystem::temp_directory_path() / ("scatter-fuzz-" + std::to_string(::getpid()));
     std::filesystem::create_directories(d);
     write(d / "cube.obj", cube_obj());
     float values[8] = {0, 1, 2, 3, 4, 5, 6, 7};
@@ -41,7 +43,8 @@ inline const std::filesystem::path& assets_dir() {
     write(d / "grid.json", R"({"dims": [2, 2, 2], "data": "grid.raw", "format": "float32",
                                "bounds": {"min": [-1, -1, -1], "max": [1, 1, 1]}})");
     for (const auto& e : std::filesystem::directory_iterator(SCATTER_FUZZ_CORPUS "/scene"))
-      std::filesystem::copy_file(e.path(), d / e.path().filename(), std::filesystem::copy_options::overwrite_existing);
+      std::filesystem::copy_file(e.path(), d / e.path().filename(),
+                                 std::filesystem::copy_options::overwrite_existing);
     std::atexit([] { std::filesystem::remove_all(assets_dir()); });
     return d;
   }();

@@ -3,9 +3,8 @@
 
 #include <filesystem>
 #include <fstream>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "gpu/gpu.hpp"
 
@@ -19,7 +18,8 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   return dir;
 }
 
-inline std::filesystem::path write_file(const std::filesystem::path& path, const std::string& text) {
+inline std::filesystem::path write_file(const std::filesystem::path& path,
+                                        const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
   return path;
 }

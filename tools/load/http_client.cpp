@@ -9,7 +9,8 @@ namespace http = beast::http;
 
 HttpClient::HttpClient(const LoadOptions& options) : options_(options), stream_(io_) {}
 
-HttpReply HttpClient::request(http::verb method, const std::string& target, const std::string& body) {
+HttpReply HttpClient::request(http::verb method, const std::string& target,
+                              const std::string& body) {
   http::request<http::string_body> req{method, target, 11};
   req.set(http::field::host, options_.host + ":" + options_.port);
   req.set(http::field::user_agent, "scatter-load");
@@ -60,7 +61,8 @@ HttpReply HttpClient::exchange(const http::request<http::string_body>& req) {
     throw boost::system::system_error(ec);
   }
   HttpReply reply;
-  reply.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  reply.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   reply.status = parser.get().result_int();
   reply.body = parser.get().body();
   if (!parser.get().keep_alive()) open_ = false;

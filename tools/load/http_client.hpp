@@ -21,7 +21,8 @@ class HttpClient {
   explicit HttpClient(const LoadOptions& options);
   // Throws boost::system::system_error when the daemon cannot be reached or the exchange fails
   // (one retry on a fresh connection when a kept-alive one turns out closed).
-  HttpReply request(boost::beast::http::verb method, const std::string& target, const std::string& body = "");
+  HttpReply request(boost::beast::http::verb method, const std::string& target,
+                    const std::string& body = "");
 
  private:
   HttpReply exchange(const boost::beast::http::request<boost::beast::http::string_body>& req);

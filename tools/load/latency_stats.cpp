@@ -7,7 +7,9 @@
 namespace scatter::load {
 namespace {
 
-double rounded(double ms) { return std::round(ms * 100) / 100; }
+double rounded(double ms) {
+  return std::round(ms * 100) / 100;
+}
 
 }  // namespace
 
@@ -32,7 +34,8 @@ nlohmann::json LatencyStats::summary() const {
   j["p50"] = rounded(percentile(50));
   j["p95"] = rounded(percentile(95));
   j["p99"] = rounded(percentile(99));
-  j["mean"] = rounded(std::accumulate(samples_.begin(), samples_.end(), 0.0) / double(samples_.size()));
+  j["mean"] =
+      rounded(std::accumulate(samples_.begin(), samples_.end(), 0.0) / double(samples_.size()));
   j["max"] = rounded(*std::max_element(samples_.begin(), samples_.end()));
   return j;
 }

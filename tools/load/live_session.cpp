@@ -9,19 +9,35 @@ namespace websocket = beast::websocket;
 using Ms = std::chrono::duration<double, std::milli>;
 
 nlohmann::json SessionResult::to_json() const {
-  return {{"index", index}, {"admitted", admitted}, {"end", end},
-          {"fps", std::round(fps() * 100) / 100}, {"frames", frames}, {"frames_reduced", frames_reduced},
-          {"bytes_received", bytes}, {"poses_sent", poses_sent}, {"poses_answered", poses_answered},
-          {"poses_coalesced", poses_coalesced}, {"poses_unanswered", poses_unanswered},
-          {"lights_sent", lights_sent}, {"open_s", std::round(open_s * 1000) / 1000},
-          {"first_frame_ms", first_frame_ms < 0 ? nlohmann::json() : nlohmann::json(std::round(first_frame_ms))},
-          {"pose_to_frame_ms", pose_to_frame.summary()}, {"render_ms", render.summary()},
+  return {{"index", index},
+          {"admitted", admitted},
+          {"end", end},
+          {"fps", std::round(fps() * 100) / 100},
+          {"frames", frames},
+          {"frames_reduced", frames_reduced},
+          {"bytes_received", bytes},
+          {"poses_sent", poses_sent},
+          {"poses_answered", poses_answered},
+          {"poses_coalesced", poses_coalesced},
+          {"poses_unanswered", poses_unanswered},
+          {"lights_sent", lights_sent},
+          {"open_s", std::round(open_s * 1000) / 1000},
+          {"first_frame_ms",
+           first_frame_ms < 0 ? nlohmann::json() : nlohmann::json(std::round(first_frame_ms))},
+          {"pose_to_frame_ms", pose_to_frame.summary()},
+          {"render_ms", render.summary()},
           {"pose_to_frame_minus_render_ms", minus_render.summary()},
-          {"header_to_image_ms", header_to_image.summary()}, {"errors", errors.to_json()}};
+          {"header_to_image_ms", header_to_image.summary()},
+          {"errors", errors.to_json()}};
 }
 
 LiveSession::LiveSession(boost::asio::io_context& io, const LoadOptions& options, int index)
-    : ws_(io), options_(options), script_(options, index), pose_timer_(io), deadline_(io), stall_(io) {
+    : ws_(io),
+      options_(options),
+      script_(options, index),
+      pose_timer_(io),
+      deadline_(io),
+      stall_(io) {
   result_.index = index;
 }
 
@@ -64,10 +80,13 @@ void LiveSession::on_handshake(beast::error_code ec) {
   result_.admitted = true;
   beast::get_lowest_layer(ws_).expires_never();
   auto timeouts = websocket::stream_base::timeout::suggested(beast::role_type::client);
-  timeouts.handshake_timeout = std::chrono::seconds(5);  // now: how long a closing handshake may take
+  timeouts.handshake_timeout =
+      std::chrono::seconds(5);  // now: how long a closing handshake may take
   ws_.set_option(timeouts);
   opened_ = hello_sent_ = Clock::now();
-  nlohmann::json hello = {{"type", "hello"}, {"scene_name", options_.scene}, {"pipeline", options_.pipeline},
+  nlohmann::json hello = {{"type", "hello"},
+                          {"scene_name", options_.scene},
+                          {"pipeline", options_.pipeline},
                           {"format", options_.format}};
   if (!options_.terms.empty()) hello["terms"] = options_.terms;
   if (!options_.settings.empty()) hello["settings"] = options_.settings;
@@ -89,7 +108,8 @@ void LiveSession::arm_stall() {
   stall_.expires_after(span(options_.timeout_s));
   stall_.async_wait([self = shared_from_this()](beast::error_code ec) {
     if (ec || self->finishing_) return;
-    self->result_.errors.add("stall", "no message for " + std::to_string(int(self->options_.timeout_s)) + " s");
+    self->result_.errors.add(
+        "stall", "no message for " + std::to_string(int(self->options_.timeout_s)) + " s");
     self->finish("stall");
   });
 }
@@ -169,24 +189,31 @@ void LiveSession::on_frame(size_t bytes) {
   if (options_.frames > 0 && result_.frames >= options_.frames) finish("frames");
 }
 
-// Ticks fall on a fixed schedule (poses_from_ + tick / rate), so a late tick does not delay the rest.
+// Ticks fall on a fixed schedule (poses_from_ + tick / rate), so a late tick does not delay the
+// rest.
 void LiveSession::next_pose() {
   pose_timer_.expires_at(poses_from_ + span(double(tick_) / options_.rate_hz));
-  pose_timer_.async_wait(beast::bind_front_handler(&LiveSession::on_pose_timer, shared_from_this()));
+  pose_timer_.async_wait(
+      beast::bind_front_handler(&LiveSession::on_pose_timer, shared_from_this()));
 }
 
 void LiveSession::on_pose_timer(beast::error_code ec) {
   if (ec || finishing_) return;
   if (auto pose = script_.at(tick_)) {
     long long revision = ++revision_;
-    send({{"type", "camera"}, {"position", pose->position}, {"target", {0, 0, 0}}, {"up", {0, 1, 0}},
+    send({{"type", "camera"},
+          {"position", pose->position},
+          {"target", {0, 0, 0}},
+          {"up", {0, 1, 0}},
           {"revision", revision}});
     pending_.emplace_back(revision, Clock::now());
     ++result_.poses_sent;
     if (options_.light_every > 0 && result_.poses_sent % options_.light_every == 0) {
       long long n = ++result_.lights_sent;
-      nlohmann::json light = {{"type", "point"}, {"position", PoseScript::light(n)},
-                              {"color", {1, 1, 1}}, {"intensity", 20}};
+      nlohmann::json light = {{"type", "point"},
+                              {"position", PoseScript::light(n)},
+                              {"color", {1, 1, 1}},
+                              {"intensity", 20}};
       send({{"type", "lights"}, {"lights", {light}}, {"revision", n}});
     }
   }
@@ -201,25 +228,27 @@ void LiveSession::send(nlohmann::json message) {
 
 void LiveSession::do_write() {
   ws_.text(true);
-  ws_.async_write(boost::asio::buffer(writes_.front()), [self = shared_from_this()](beast::error_code ec, size_t) {
-    if (ec) {
-      self->writes_.clear();
-      if (!self->finishing_) {
-        self->result_.errors.add("disconnect", "write: " + ec.message());
-        self->finish("disconnected");
-      }
-      return;
-    }
-    self->writes_.pop_front();
-    if (!self->writes_.empty()) self->do_write();
-  });
+  ws_.async_write(boost::asio::buffer(writes_.front()),
+                  [self = shared_from_this()](beast::error_code ec, size_t) {
+                    if (ec) {
+                      self->writes_.clear();
+                      if (!self->finishing_) {
+                        self->result_.errors.add("disconnect", "write: " + ec.message());
+                        self->finish("disconnected");
+                      }
+                      return;
+                    }
+                    self->writes_.pop_front();
+                    if (!self->writes_.empty()) self->do_write();
+                  });
 }
 
 void LiveSession::finish(const std::string& why) {
   if (finishing_) return;
   finishing_ = true;
   result_.end = why;
-  if (result_.admitted) result_.open_s = std::chrono::duration<double>(Clock::now() - opened_).count();
+  if (result_.admitted)
+    result_.open_s = std::chrono::duration<double>(Clock::now() - opened_).count();
   result_.poses_unanswered = static_cast<long long>(pending_.size());
   pose_timer_.cancel();
   deadline_.cancel();

@@ -32,7 +32,7 @@ struct SessionResult {
   double first_frame_ms = -1;  // from hello to the first frame
   LatencyStats pose_to_frame;  // every answered pose
   LatencyStats render;         // the server's own timings_ms, summed, per frame
-  LatencyStats minus_render;   // pose to frame minus that frame's render, for exactly answered poses
+  LatencyStats minus_render;  // pose to frame minus that frame's render, for exactly answered poses
   LatencyStats header_to_image;  // from a frame's JSON header to its image (the transport's share)
   ErrorTally errors;
 
@@ -72,7 +72,7 @@ class LiveSession : public std::enable_shared_from_this<LiveSession> {
   Clock::time_point opened_, hello_sent_, poses_from_, header_at_;
   long long tick_ = 0, revision_ = 0;
   std::deque<std::pair<long long, Clock::time_point>> pending_;  // poses not yet answered
-  std::optional<nlohmann::json> header_;                         // a frame header awaiting its image
+  std::optional<nlohmann::json> header_;  // a frame header awaiting its image
   std::deque<std::string> writes_;
   bool finishing_ = false;
   SessionResult result_;

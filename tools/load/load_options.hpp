@@ -39,7 +39,8 @@ struct LoadOptions {
 
 // A timer's duration from seconds given on the command line.
 inline std::chrono::steady_clock::duration span(double seconds) {
-  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(seconds));
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(seconds));
 }
 
 }  // namespace scatter::load

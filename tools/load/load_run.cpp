@@ -15,9 +15,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
-double round2(double v) { return std::round(v * 100) / 100; }
+double round2(double v) {
+  return std::round(v * 100) / 100;
+}
 
 }  // namespace
 
@@ -31,15 +35,17 @@ nlohmann::json LoadRun::preflight() {
     throw std::runtime_error("cannot reach scatterd at " + where + ": " + e.what());
   }
   if (r.status == 401)
-    throw std::runtime_error("scatterd at " + where + " refused the token (401): give the right --token");
+    throw std::runtime_error("scatterd at " + where +
+                             " refused the token (401): give the right --token");
   nlohmann::json health = nlohmann::json::parse(r.body, nullptr, false);
   if (r.status != 200 || !health.is_object())
-    throw std::runtime_error("GET /api/health at " + where + " answered " + std::to_string(r.status) +
-                             ": is this scatterd?");
+    throw std::runtime_error("GET /api/health at " + where + " answered " +
+                             std::to_string(r.status) + ": is this scatterd?");
   return health;
 }
 
-nlohmann::json LoadRun::measured(const std::string& mode, const std::function<nlohmann::json()>& run) {
+nlohmann::json LoadRun::measured(const std::string& mode,
+                                 const std::function<nlohmann::json()>& run) {
   nlohmann::json health = preflight();
   RssSampler rss(options_);
   rss.start();
@@ -47,11 +53,15 @@ nlohmann::json LoadRun::measured(const std::string& mode, const std::function<nl
   nlohmann::json results = run();
   double seconds = seconds_since(start);
   rss.stop();
-  nlohmann::json report = {
-      {"mode", mode}, {"target", options_.host + ":" + options_.port},
-      {"daemon_version", health.value("version", "")}, {"scene", options_.scene},
-      {"pipeline", options_.pipeline}, {"terms", options_.terms}, {"format", options_.format},
-      {"settings", options_.settings}, {"duration_s", round2(seconds)}};
+  nlohmann::json report = {{"mode", mode},
+                           {"target", options_.host + ":" + options_.port},
+                           {"daemon_version", health.value("version", "")},
+                           {"scene", options_.scene},
+                           {"pipeline", options_.pipeline},
+                           {"terms", options_.terms},
+                           {"format", options_.format},
+                           {"settings", options_.settings},
+                           {"duration_s", round2(seconds)}};
   report.update(results);
   report["rss"] = rss.report();
   return report;
@@ -99,22 +109,32 @@ nlohmann::json LoadRun::live_report(const std::vector<SessionResult>& sessions) 
     fps_sum += s.fps();
     ++admitted;
   }
-  return {{"sessions_requested", sessions.size()}, {"sessions_admitted", admitted},
-          {"frames", frames}, {"fps_total", round2(fps_sum)}, {"poses_sent", poses},
-          {"poses_coalesced", coalesced}, {"poses_unanswered", unanswered},
-          {"pose_to_frame_ms", pose_to_frame.summary()}, {"render_ms", render.summary()},
+  return {{"sessions_requested", sessions.size()},
+          {"sessions_admitted", admitted},
+          {"frames", frames},
+          {"fps_total", round2(fps_sum)},
+          {"poses_sent", poses},
+          {"poses_coalesced", coalesced},
+          {"poses_unanswered", unanswered},
+          {"pose_to_frame_ms", pose_to_frame.summary()},
+          {"render_ms", render.summary()},
           {"pose_to_frame_minus_render_ms", minus_render.summary()},
           {"header_to_image_ms", header_to_image.summary()},
-          {"fairness", {{"min_fps", round2(fps_min)}, {"max_fps", round2(fps_max)},
-                        {"min_over_max", fps_max > 0 ? round2(fps_min / fps_max) : 0.0}}},
-          {"errors", errors.to_json()}, {"per_session", per_session}};
+          {"fairness",
+           {{"min_fps", round2(fps_min)},
+            {"max_fps", round2(fps_max)},
+            {"min_over_max", fps_max > 0 ? round2(fps_min / fps_max) : 0.0}}},
+          {"errors", errors.to_json()},
+          {"per_session", per_session}};
 }
 
 nlohmann::json LoadRun::rest() {
   return measured("rest", [this] {
-    auto deadline = options_.duration_s > 0 ? Clock::now() + span(options_.duration_s) : Clock::time_point::max();
+    auto deadline = options_.duration_s > 0 ? Clock::now() + span(options_.duration_s)
+                                            : Clock::time_point::max();
     std::vector<std::unique_ptr<RestClient>> clients;
-    for (int i = 0; i < options_.clients; ++i) clients.push_back(std::make_unique<RestClient>(options_, i));
+    for (int i = 0; i < options_.clients; ++i)
+      clients.push_back(std::make_unique<RestClient>(options_, i));
     std::vector<std::thread> threads;
     for (auto& c : clients) threads.emplace_back([&c, deadline] { c->run(deadline); });
     for (auto& t : threads) t.join();
@@ -137,12 +157,14 @@ nlohmann::json LoadRun::rest_report(const std::vector<RestResult>& clients) {
     for (const auto& [state, n] : c.bake_states) bake_states[state] += n;
     errors.merge(c.errors);
     cycles += c.cycles;
-    per_client.push_back({{"index", c.index}, {"cycles", c.cycles}, {"seconds", round2(c.seconds)},
+    per_client.push_back({{"index", c.index},
+                          {"cycles", c.cycles},
+                          {"seconds", round2(c.seconds)},
                           {"errors", c.errors.to_json()}});
   }
   nlohmann::json by_route = nlohmann::json::object();
   for (const auto& [name, r] : routes) by_route[name] = r.to_json();
-  return {{"clients", clients.size()}, {"cycles", cycles}, {"routes", by_route},
+  return {{"clients", clients.size()},  {"cycles", cycles},           {"routes", by_route},
           {"bake_states", bake_states}, {"errors", errors.to_json()}, {"per_client", per_client}};
 }
 

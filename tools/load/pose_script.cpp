@@ -10,7 +10,8 @@ PoseScript::PoseScript(const LoadOptions& options, int session)
       rate_hz_(options.rate_hz),
       orbit_rad_s_(options.orbit_deg_s * M_PI / 180),
       burst_poses_(options.burst_poses),
-      burst_pause_ticks_(static_cast<int>(std::ceil(options.burst_pause_ms / 1000.0 * options.rate_hz))),
+      burst_pause_ticks_(
+          static_cast<int>(std::ceil(options.burst_pause_ms / 1000.0 * options.rate_hz))),
       // Sessions start spread around the object, so that their frames differ.
       yaw_(session * 2.399963),
       rng_(options.seed + 7919u * unsigned(session)) {}
@@ -29,7 +30,8 @@ std::optional<Pose> PoseScript::at(long long tick) {
     radius_ = std::clamp(radius_ + step(rng_), 2.5, 5.0);
     return place();
   }
-  if (path_ == "burst" && tick % (burst_poses_ + burst_pause_ticks_) >= burst_poses_) return std::nullopt;
+  if (path_ == "burst" && tick % (burst_poses_ + burst_pause_ticks_) >= burst_poses_)
+    return std::nullopt;
   yaw_ += orbit_rad_s_ * dt;
   return place();
 }

@@ -80,10 +80,12 @@ void RestClient::bake(Clock::time_point deadline) {
     reply = call("GET /api/bakes/{id}", http::verb::get, target);
     if (reply.status != 200) return;
     job = nlohmann::json::parse(reply.body, nullptr, false);
-    if (!job.is_object()) return result_.errors.add("protocol", "GET " + target + " is not a JSON object");
+    if (!job.is_object())
+      return result_.errors.add("protocol", "GET " + target + " is not a JSON object");
   }
   ++result_.bake_states[job["state"].get<std::string>()];
-  result_.routes["bake"].ms.add(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+  result_.routes["bake"].ms.add(
+      std::chrono::duration<double, std::milli>(Clock::now() - start).count());
   ++result_.routes["bake"].statuses[200];
 }
 

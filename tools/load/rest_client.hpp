@@ -43,8 +43,8 @@ class RestClient {
 
  private:
   nlohmann::json body() const;
-  HttpReply call(const std::string& route, boost::beast::http::verb method, const std::string& target,
-                 const std::string& payload = "");
+  HttpReply call(const std::string& route, boost::beast::http::verb method,
+                 const std::string& target, const std::string& payload = "");
   void render();
   void bake(Clock::time_point deadline);
 

@@ -9,7 +9,9 @@ namespace scatter::load {
 
 RssSampler::RssSampler(const LoadOptions& options) : options_(options), http_(options) {}
 
-RssSampler::~RssSampler() { stop(); }
+RssSampler::~RssSampler() {
+  stop();
+}
 
 void RssSampler::start() {
   started_ = std::chrono::steady_clock::now();
@@ -71,16 +73,19 @@ void RssSampler::sample() {
   }
   if (!bytes) return;
   if (source_.empty()) source_ = source;
-  series_.emplace_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count(), *bytes);
+  series_.emplace_back(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count(), *bytes);
 }
 
 nlohmann::json RssSampler::report() const {
   nlohmann::json j = {{"source", source_.empty() ? nlohmann::json() : nlohmann::json(source_)},
-                      {"samples", series_.size()}, {"interval_s", options_.rss_interval_s},
+                      {"samples", series_.size()},
+                      {"interval_s", options_.rss_interval_s},
                       {"metrics_ms", metrics_ms_.summary()}};
   if (series_.empty()) return j;
-  auto [lo, hi] = std::minmax_element(series_.begin(), series_.end(),
-                                      [](const auto& a, const auto& b) { return a.second < b.second; });
+  auto [lo, hi] =
+      std::minmax_element(series_.begin(), series_.end(),
+                          [](const auto& a, const auto& b) { return a.second < b.second; });
   double first = series_.front().second, last = series_.back().second;
   auto pct = [](double v) { return std::round(v * 1000) / 10; };
   j["start_bytes"] = first;

@@ -4,8 +4,8 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -370,17 +370,19 @@ TEST_F(BakeCacheTest, DiskBudgetEvictsLeastRecentlyUsedFiles) {
   // Age them: 0 oldest ... 3 newest; a crashed writer's temporary file two hours old.
   auto now = fs::file_time_type::clock::now();
   for (int i = 0; i < 4; ++i)
-    fs::last_write_time(BakeCache(dir_).file_path(key_of(std::to_string(i))), now - std::chrono::minutes(10 - i));
+    fs::last_write_time(BakeCache(dir_).file_path(key_of(std::to_string(i))),
+                        now - std::chrono::minutes(10 - i));
   write_all(dir_ / (key_of("tmp") + ".bake.tmp-1-1"), "half");
   fs::last_write_time(dir_ / (key_of("tmp") + ".bake.tmp-1-1"), now - std::chrono::hours(2));
-  BakeCache cache(dir_, 0);  // nothing in memory: every get reads the disk
+  BakeCache cache(dir_, 0);             // nothing in memory: every get reads the disk
   ASSERT_TRUE(cache.get(key_of("0")));  // a use: 0 is now the newest
   cache.set_disk_budget(3 * 1084);
   cache.put(key_of("4"), payload);  // five files, room for three
   EXPECT_EQ(cache.stats().disk_evictions, 2u);
   EXPECT_FALSE(fs::exists(cache.file_path(key_of("1"))));
   EXPECT_FALSE(fs::exists(cache.file_path(key_of("2"))));
-  for (const char* kept : {"0", "3", "4"}) EXPECT_TRUE(fs::exists(cache.file_path(key_of(kept)))) << kept;
+  for (const char* kept : {"0", "3", "4"})
+    EXPECT_TRUE(fs::exists(cache.file_path(key_of(kept)))) << kept;
   EXPECT_FALSE(fs::exists(dir_ / (key_of("tmp") + ".bake.tmp-1-1")));
   // A budget smaller than one product still keeps the one just written.
   cache.set_disk_budget(10);

@@ -14,8 +14,10 @@ std::string numbered(std::string prefix, size_t i) {
 
 const std::vector<std::pair<std::string, double>> kStages = {{"a", 0.25}, {"b", 0.75}};
 
-std::shared_ptr<BakeJob> submit(BakeJobs& jobs, const std::string& identity, bool* created = nullptr) {
-  return jobs.submit(identity, "single", kStages, [](std::shared_ptr<BakeJob>) {}, created);
+std::shared_ptr<BakeJob> submit(BakeJobs& jobs, const std::string& identity,
+                                bool* created = nullptr) {
+  return jobs.submit(
+      identity, "single", kStages, [](std::shared_ptr<BakeJob>) {}, created);
 }
 
 TEST(BakeJobs, ProgressFollowsStageSharesAndNeverDecreases) {
@@ -80,7 +82,7 @@ TEST(BakeJobs, CancelQueuedRunningAndFinished) {
     progress("a", 0.5);
     EXPECT_TRUE(running->cancel());
     EXPECT_NE(submit(jobs, "r"), running);  // being cancelled: a new POST gets a new job
-    progress("a", 0.6);                      // throws BakeCancelled
+    progress("a", 0.6);                     // throws BakeCancelled
     ADD_FAILURE() << "the progress report after cancel() did not stop the bake";
     return BakeResult{};
   });
@@ -91,7 +93,8 @@ TEST(BakeJobs, CancelQueuedRunningAndFinished) {
 TEST(BakeJobs, LimitsActiveJobsAndForgetsOldFinishedOnes) {
   BakeJobs jobs;
   std::vector<std::shared_ptr<BakeJob>> active;
-  for (int i = 0; i < BakeJobs::kMaxActive; ++i) active.push_back(submit(jobs, numbered("a", size_t(i))));
+  for (int i = 0; i < BakeJobs::kMaxActive; ++i)
+    active.push_back(submit(jobs, numbered("a", size_t(i))));
   EXPECT_THROW(submit(jobs, "one more"), BakeJobs::Busy);
   EXPECT_FALSE(jobs.find(BakeJobs::id_for("one more")));
   EXPECT_EQ(submit(jobs, "a0"), active[0]);  // an existing job is still found

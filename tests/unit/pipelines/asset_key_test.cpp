@@ -10,7 +10,9 @@
 namespace scatter {
 namespace {
 
-Scene parse(const nlohmann::json& j) { return parse_scene(j, test::source_path("scenes")); }
+Scene parse(const nlohmann::json& j) {
+  return parse_scene(j, test::source_path("scenes"));
+}
 
 nlohmann::json noise_sphere() {
   nlohmann::json j = test::minimal_scene();
@@ -55,7 +57,8 @@ TEST(AssetKey, ScenesBuiltInCodeFallBackToTheirContent) {
   Scene a = parse(noise_sphere());
   Scene code = a;
   code.mesh_id.clear();
-  EXPECT_EQ(asset_key(code).hex(), asset_key(a).hex());  // the same mesh bytes, the same density object
+  EXPECT_EQ(asset_key(code).hex(),
+            asset_key(a).hex());  // the same mesh bytes, the same density object
 }
 
 // The single product's key is what bake() files the product under.

@@ -34,7 +34,9 @@ double tolerance(const std::string& pipeline) {
 
 // The phase's g on the box: lbl's view pass takes the phase as isotropic (its plan says so; the
 // anisotropic view pass is open work), so it is held to the isotropic closed form.
-double box_g(const std::string& pipeline) { return pipeline == "lbl" ? 0.0 : 0.3; }
+double box_g(const std::string& pipeline) {
+  return pipeline == "lbl" ? 0.0 : 0.3;
+}
 
 class Conformance : public ::testing::TestWithParam<std::string> {
  protected:
@@ -42,9 +44,12 @@ class Conformance : public ::testing::TestWithParam<std::string> {
   RenderRequest request(Terms terms) const { return {terms, quick(GetParam()), nullptr}; }
 };
 
-std::string test_name(const ::testing::TestParamInfo<std::string>& p) { return p.param; }
+std::string test_name(const ::testing::TestParamInfo<std::string>& p) {
+  return p.param;
+}
 
-INSTANTIATE_TEST_SUITE_P(EveryPipeline, Conformance, ::testing::ValuesIn(pipeline_names()), test_name);
+INSTANTIATE_TEST_SUITE_P(EveryPipeline, Conformance, ::testing::ValuesIn(pipeline_names()),
+                         test_name);
 
 TEST_P(Conformance, PlanTouchesNoGpu) {
   gpu::Gpu none({.unavailable = "plan() must not touch the GPU"});
@@ -81,7 +86,8 @@ TEST_P(Conformance, SettingsTableIsWhatValidationEnforces) {
     EXPECT_NO_THROW(i.validate({{s.key, s.def}}));
     EXPECT_THROW(i.validate({{s.key, s.hi + std::max(1.0, std::abs(s.hi))}}), ValidationError);
     EXPECT_THROW(i.validate({{s.key, s.lo - std::max(1.0, std::abs(s.lo))}}), ValidationError);
-    if (s.kind != SettingKind::Number) EXPECT_THROW(i.validate({{s.key, s.lo + 0.5}}), ValidationError);
+    if (s.kind != SettingKind::Number)
+      EXPECT_THROW(i.validate({{s.key, s.lo + 0.5}}), ValidationError);
   }
   for (const Quality& q : i.qualities) EXPECT_NO_THROW(i.validate(q.settings)) << q.name;
   EXPECT_TRUE(std::find(i.terms.begin(), i.terms.end(), i.default_terms) != i.terms.end());
@@ -100,19 +106,22 @@ TEST_P(Conformance, RenderRunsThePlannedStages) {
     ASSERT_EQ(planned.stages.size(), ran.stages.size());
     for (size_t k = 0; k < ran.stages.size(); ++k) {
       EXPECT_EQ(planned.stages[k].name, ran.stages[k].name);
-      EXPECT_EQ(planned.stages[k].run, ran.stages[k].run) << ran.stages[k].name << ": " << ran.stages[k].reason;
+      EXPECT_EQ(planned.stages[k].run, ran.stages[k].run)
+          << ran.stages[k].name << ": " << ran.stages[k].reason;
     }
     EXPECT_EQ(planned.pipeline, ran.pipeline);
   }
 }
 
 TEST_P(Conformance, AxisBoxSingleTermMatchesClosedForm) {
-  if (!info().renders(Terms::Single)) GTEST_SKIP() << GetParam() << " does not render the single term";
+  if (!info().renders(Terms::Single))
+    GTEST_SKIP() << GetParam() << " does not render the single term";
   const double ss = 0.8, sa = 0.2, g = box_g(GetParam());
   auto p = make_pipeline(GetParam(), test::shared_gpu());
   Image img = p->render(test::axis_box(ss, sa, g), request(Terms::Single)).image;
   const double expected = test::axis_box_radiance(ss, sa, g);
-  for (int c = 0; c < 3; ++c) EXPECT_NEAR(img.at(4, 4)[c], expected, tolerance(GetParam()) * expected) << c;
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(img.at(4, 4)[c], expected, tolerance(GetParam()) * expected) << c;
 }
 
 // The box seen from below its centre sits in the image's upper half: rows 0-3 hold more light

@@ -1,11 +1,10 @@
 #include "pipelines/image.hpp"
 
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
-
-#include <OpenImageIO/imageio.h>
 
 #include "../test_util.hpp"
 

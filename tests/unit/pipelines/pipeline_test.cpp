@@ -11,12 +11,15 @@ namespace {
 TEST(PipelineFactory, MakesEveryKnownPipelineAndRejectsUnknownNames) {
   for (const auto& name : pipeline_names())
     EXPECT_EQ(make_pipeline(name, test::shared_gpu())->name(), name);
-  EXPECT_EQ(pipeline_names(), (std::vector<std::string>{"auto", "surface", "reference", "thickness", "single", "psf", "lbl"}));
+  EXPECT_EQ(pipeline_names(), (std::vector<std::string>{"auto", "surface", "reference", "thickness",
+                                                        "single", "psf", "lbl"}));
   try {
     make_pipeline("magic", test::shared_gpu());
     FAIL();
   } catch (const ValidationError& e) {
-    EXPECT_EQ(std::string(e.what()), "pipeline: unknown pipeline \"magic\" (known: auto, surface, reference, thickness, single, psf, lbl)");
+    EXPECT_EQ(std::string(e.what()),
+              "pipeline: unknown pipeline \"magic\" (known: auto, surface, reference, thickness, "
+              "single, psf, lbl)");
   }
   EXPECT_EQ(parse_terms("multiple"), Terms::Multiple);
   EXPECT_THROW(parse_terms("everything"), ValidationError);
@@ -36,7 +39,8 @@ TEST(SettingsReader, DefaultsRangesAndUnknownKeys) {
     b.integer("spp", 4, 1, 100);
     FAIL();
   } catch (const ValidationError& e) {
-    EXPECT_EQ(std::string(e.what()), "settings.spp: must be in [1, 100] for pipeline demo, got 1000");
+    EXPECT_EQ(std::string(e.what()),
+              "settings.spp: must be in [1, 100] for pipeline demo, got 1000");
   }
   try {
     b.finish();

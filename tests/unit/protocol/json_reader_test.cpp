@@ -27,22 +27,41 @@ TEST(JsonReader, ReadsTypedFieldsWithDefaults) {
 }
 
 TEST(JsonReader, ErrorsNameTheFieldAndTheProblem) {
-  auto j = nlohmann::json::parse(R"({"a": -1, "n": 2.5, "v": [1, "x", 3], "t": "cube", "extra": 1})");
+  auto j =
+      nlohmann::json::parse(R"({"a": -1, "n": 2.5, "v": [1, "x", 3], "t": "cube", "extra": 1})");
   JsonObject o(j, "root");
-  EXPECT_EQ(error_of([&] { o.number("a", std::nullopt, {0, 10}); }), "root.a: must be in [0, 10], got -1");
-  EXPECT_EQ(error_of([&] { o.integer("n", std::nullopt, {0, 10}); }), "root.n: must be an integer, got 2.5");
-  EXPECT_EQ(error_of([&] { o.vec3("v", std::nullopt, {0, 10}); }), "root.v[1]: must be a number, got string");
-  EXPECT_EQ(error_of([&] { o.choice("t", {"sphere", "box"}, std::nullopt); }),
+  EXPECT_EQ(error_of([&] {
+              o.number("a", std::nullopt, {0, 10});
+            }),
+            "root.a: must be in [0, 10], got -1");
+  EXPECT_EQ(error_of([&] {
+              o.integer("n", std::nullopt, {0, 10});
+            }),
+            "root.n: must be an integer, got 2.5");
+  EXPECT_EQ(error_of([&] {
+              o.vec3("v", std::nullopt, {0, 10});
+            }),
+            "root.v[1]: must be a number, got string");
+  EXPECT_EQ(error_of([&] {
+              o.choice("t", {"sphere", "box"}, std::nullopt);
+            }),
             "root.t: must be one of sphere, box; got \"cube\"");
-  EXPECT_EQ(error_of([&] { o.number("absent", std::nullopt, {0, 1}); }), "root.absent: is required");
+  EXPECT_EQ(error_of([&] {
+              o.number("absent", std::nullopt, {0, 1});
+            }),
+            "root.absent: is required");
   EXPECT_EQ(error_of([&] { o.finish(); }), "root.extra: is not a known field");
 }
 
 TEST(JsonReader, RejectsNonFiniteAndNonObjects) {
   nlohmann::json j = {{"x", std::numeric_limits<double>::infinity()}};
   JsonObject o(j, "r");
-  EXPECT_NE(error_of([&] { o.number("x", std::nullopt, {-1e300, 1e300}); }).find("r.x"), std::string::npos);
-  EXPECT_EQ(error_of([] { JsonObject(nlohmann::json::array(), "r"); }), "r: must be an object, got array");
+  EXPECT_NE(error_of([&] {
+              o.number("x", std::nullopt, {-1e300, 1e300});
+            }).find("r.x"),
+            std::string::npos);
+  EXPECT_EQ(error_of([] { JsonObject(nlohmann::json::array(), "r"); }),
+            "r: must be an object, got array");
 }
 
 TEST(JsonReader, MalformedTextReportsPosition) {
@@ -66,7 +85,8 @@ TEST(JsonReader, NestingIsBoundedBeforeAnythingRecurses) {
   EXPECT_NO_THROW(parse_json(nested(kMaxJsonDepth), "body"));
   EXPECT_THROW(parse_json(nested(kMaxJsonDepth + 1), "body"), ValidationError);
   try {
-    parse_json("{\"a\": " + nested(100000) + "}", "body");  // would exhaust a recursive walker's stack
+    parse_json("{\"a\": " + nested(100000) + "}",
+               "body");  // would exhaust a recursive walker's stack
     FAIL() << "accepted 100000 levels";
   } catch (const ValidationError& e) {
     EXPECT_EQ(e.field(), "body");

@@ -13,7 +13,8 @@
 namespace scatter {
 namespace {
 
-std::shared_ptr<const DensityField> make(const nlohmann::json& j, const std::filesystem::path& dir = ".") {
+std::shared_ptr<const DensityField> make(const nlohmann::json& j,
+                                         const std::filesystem::path& dir = ".") {
   JsonObject o(j, "density");
   auto f = parse_density(o, dir);
   o.finish();
@@ -90,20 +91,33 @@ TEST(Density, GridFilesThatLieAreRejected) {
     ADD_FAILURE() << "accepted " << header;
     return "";
   };
-  auto floats = [](std::vector<float> v) { return std::string(reinterpret_cast<const char*>(v.data()), v.size() * 4); };
+  auto floats = [](std::vector<float> v) {
+    return std::string(reinterpret_cast<const char*>(v.data()), v.size() * 4);
+  };
   const std::string bounds = R"("bounds": {"min": [0, 0, 0], "max": [1, 1, 1]})";
-  auto header = [&](const std::string& dims) { return R"({"dims": )" + dims + R"(, "data": "g.raw", )" + bounds + "}"; };
+  auto header = [&](const std::string& dims) {
+    return R"({"dims": )" + dims + R"(, "data": "g.raw", )" + bounds + "}";
+  };
   // More data than the dims say, as well as less.
-  EXPECT_NE(error(header("[1, 1, 1]"), floats({1, 2})).find("must hold 4 bytes"), std::string::npos);
-  EXPECT_NE(error(header("[2, 1, 1]"), floats({1})).find("must hold 8 bytes"), std::string::npos);
-  for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -0.5f})
-    EXPECT_NE(error(header("[2, 1, 1]"), floats({1, bad})).find("value 1 is negative or not finite"), std::string::npos);
-  for (const char* dims : {"[0, 1, 1]", "[-2, 1, 1]", "[2.5, 1, 1]", "[2, 1]", "[513, 512, 512]", "[1e10, 1, 1]"})
-    EXPECT_NE(error(header(dims), floats({1})).find("dims"), std::string::npos) << dims;
-  EXPECT_NE(error(R"({"dims": [1, 1, 1], "data": "g.raw", "bounds": {"min": [0, 0, 0], "max": [1, 0, 1]}})", floats({1}))
-                .find("max must exceed min"),
+  EXPECT_NE(error(header("[1, 1, 1]"), floats({1, 2})).find("must hold 4 bytes"),
             std::string::npos);
-  EXPECT_NE(error(R"({"dims": [1, 1, 1], "data": "g.raw")", floats({1})).find("not valid JSON"), std::string::npos);
+  EXPECT_NE(error(header("[2, 1, 1]"), floats({1})).find("must hold 8 bytes"), std::string::npos);
+  for (float bad :
+       {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -0.5f})
+    EXPECT_NE(
+        error(header("[2, 1, 1]"), floats({1, bad})).find("value 1 is negative or not finite"),
+        std::string::npos);
+  for (const char* dims :
+       {"[0, 1, 1]", "[-2, 1, 1]", "[2.5, 1, 1]", "[2, 1]", "[513, 512, 512]", "[1e10, 1, 1]"})
+    EXPECT_NE(error(header(dims), floats({1})).find("dims"), std::string::npos) << dims;
+  EXPECT_NE(
+      error(
+          R"({"dims": [1, 1, 1], "data": "g.raw", "bounds": {"min": [0, 0, 0], "max": [1, 0, 1]}})",
+          floats({1}))
+          .find("max must exceed min"),
+      std::string::npos);
+  EXPECT_NE(error(R"({"dims": [1, 1, 1], "data": "g.raw")", floats({1})).find("not valid JSON"),
+            std::string::npos);
 }
 
 // A grid header or data file that is a FIFO is refused at once, not read (which would block).
@@ -112,7 +126,9 @@ TEST(Density, GridFilesThatAreNotRegularFilesAreRefused) {
   ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
   auto done = std::make_shared<std::promise<std::string>>();
   auto result = done->get_future();
-  test::write_file(dir / "g.json", R"({"dims": [1, 1, 1], "data": "fifo", "bounds": {"min": [0, 0, 0], "max": [1, 1, 1]}})");
+  test::write_file(
+      dir / "g.json",
+      R"({"dims": [1, 1, 1], "data": "fifo", "bounds": {"min": [0, 0, 0], "max": [1, 1, 1]}})");
   std::thread([done, dir] {
     std::string errors;
     for (const char* file : {"fifo", "g.json"}) {
@@ -124,7 +140,8 @@ TEST(Density, GridFilesThatAreNotRegularFilesAreRefused) {
     }
     done->set_value(errors);
   }).detach();
-  ASSERT_EQ(result.wait_for(std::chrono::seconds(10)), std::future_status::ready) << "reading a FIFO blocked";
+  ASSERT_EQ(result.wait_for(std::chrono::seconds(10)), std::future_status::ready)
+      << "reading a FIFO blocked";
   std::string errors = result.get();
   EXPECT_NE(errors.find("not a regular file"), std::string::npos) << errors;
   EXPECT_NE(errors.find("must hold 4 bytes"), std::string::npos) << errors;

@@ -1,7 +1,6 @@
 #include "scene/mesh.hpp"
 
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 
 #include <chrono>
@@ -23,23 +22,34 @@ const int kTriangles[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1
 
 std::string cube_obj() {
   std::string s;
-  for (auto& c : kCorners) s += "v " + std::to_string(c[0]) + " " + std::to_string(c[1]) + " " + std::to_string(c[2]) + "\n";
-  for (auto& t : kTriangles) s += "f " + std::to_string(t[0] + 1) + " " + std::to_string(t[1] + 1) + " " + std::to_string(t[2] + 1) + "\n";
+  for (auto& c : kCorners)
+    s += "v " + std::to_string(c[0]) + " " + std::to_string(c[1]) + " " + std::to_string(c[2]) +
+         "\n";
+  for (auto& t : kTriangles)
+    s += "f " + std::to_string(t[0] + 1) + " " + std::to_string(t[1] + 1) + " " +
+         std::to_string(t[2] + 1) + "\n";
   return s;
 }
 
 std::string cube_ply() {
-  std::string s = "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
-                  "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n";
-  for (auto& c : kCorners) s += std::to_string(c[0]) + " " + std::to_string(c[1]) + " " + std::to_string(c[2]) + "\n";
-  for (auto& t : kTriangles) s += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + "\n";
+  std::string s =
+      "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n";
+  for (auto& c : kCorners)
+    s += std::to_string(c[0]) + " " + std::to_string(c[1]) + " " + std::to_string(c[2]) + "\n";
+  for (auto& t : kTriangles)
+    s += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) +
+         "\n";
   return s;
 }
 
 std::string cube_off() {
   std::string s = "OFF\n# the unit cube\n8 12 0\n";
-  for (auto& c : kCorners) s += std::to_string(c[0]) + " " + std::to_string(c[1]) + " " + std::to_string(c[2]) + "\n";
-  for (auto& t : kTriangles) s += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + "\n";
+  for (auto& c : kCorners)
+    s += std::to_string(c[0]) + " " + std::to_string(c[1]) + " " + std::to_string(c[2]) + "\n";
+  for (auto& t : kTriangles)
+    s += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) +
+         "\n";
   return s;
 }
 
@@ -50,7 +60,8 @@ std::string cube_stl() {
     s += " facet normal 0 0 0\n  outer loop\n";
     for (int k = 0; k < 3; ++k) {
       const double* c = kCorners[t[k]];
-      s += "   vertex " + std::to_string(c[0]) + " " + std::to_string(c[1]) + " " + std::to_string(c[2]) + "\n";
+      s += "   vertex " + std::to_string(c[0]) + " " + std::to_string(c[1]) + " " +
+           std::to_string(c[2]) + "\n";
     }
     s += "  endloop\n endfacet\n";
   }
@@ -93,13 +104,20 @@ std::string cube_gltf() {
       {"scenes", {{{"nodes", {0}}}}},
       {"nodes", {{{"mesh", 0}}}},
       {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
-      {"buffers", {{{"byteLength", bin.size()},
-                    {"uri", "data:application/octet-stream;base64," + base64(bin)}}}},
-      {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 96}},
-                       {{"buffer", 0}, {"byteOffset", 96}, {"byteLength", 72}}}},
-      {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"},
-                      {"min", {0, 0, 0}}, {"max", {1, 1, 1}}},
-                     {{"bufferView", 1}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}}}}};
+      {"buffers",
+       {{{"byteLength", bin.size()},
+         {"uri", "data:application/octet-stream;base64," + base64(bin)}}}},
+      {"bufferViews",
+       {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 96}},
+        {{"buffer", 0}, {"byteOffset", 96}, {"byteLength", 72}}}},
+      {"accessors",
+       {{{"bufferView", 0},
+         {"componentType", 5126},
+         {"count", 8},
+         {"type", "VEC3"},
+         {"min", {0, 0, 0}},
+         {"max", {1, 1, 1}}},
+        {{"bufferView", 1}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}}}}};
   return g.dump();
 }
 
@@ -134,7 +152,8 @@ INSTANTIATE_TEST_SUITE_P(Formats, MeshImport, ::testing::Values("obj", "ply", "s
 TEST(Mesh, WatertightCheckFindsHolesAndFlippedFaces) {
   Mesh m;
   for (auto& c : kCorners) m.positions.push_back({c[0], c[1], c[2]});
-  for (auto& t : kTriangles) m.indices.insert(m.indices.end(), {uint32_t(t[0]), uint32_t(t[1]), uint32_t(t[2])});
+  for (auto& t : kTriangles)
+    m.indices.insert(m.indices.end(), {uint32_t(t[0]), uint32_t(t[1]), uint32_t(t[2])});
   EXPECT_TRUE(check_watertight(m).watertight());
   EXPECT_NEAR(m.volume(), 1.0, 1e-12);
 
@@ -167,8 +186,8 @@ TEST(Mesh, StanfordBunnyIsWatertight) {
   EXPECT_TRUE(check_watertight(m).watertight()) << check_watertight(m).summary();
 }
 
-// Runs `load` on a thread of its own and gives it `seconds`: a load that blocks (on a FIFO) or loops
-// fails the test instead of hanging the test binary (the thread is left behind).
+// Runs `load` on a thread of its own and gives it `seconds`: a load that blocks (on a FIFO) or
+// loops fails the test instead of hanging the test binary (the thread is left behind).
 template <class Load>
 std::optional<std::string> error_within(Load load, double seconds, bool* timed_out) {
   auto done = std::make_shared<std::promise<std::optional<std::string>>>();
@@ -188,7 +207,8 @@ std::optional<std::string> error_within(Load load, double seconds, bool* timed_o
 // The error load_mesh_bytes gives for `bytes` as `format`, within 10 s; FAILs without one.
 std::string import_error(const std::string& bytes, const std::string& format) {
   bool timed_out = false;
-  auto error = error_within([bytes, format] { load_mesh_bytes(bytes, format, "upload"); }, 10, &timed_out);
+  auto error =
+      error_within([bytes, format] { load_mesh_bytes(bytes, format, "upload"); }, 10, &timed_out);
   EXPECT_FALSE(timed_out) << format << " import still running after 10 s";
   EXPECT_TRUE(error.has_value()) << format << " import accepted a malformed file";
   return error.value_or("");
@@ -210,49 +230,73 @@ TEST(MeshOff, CountsLargerThanTheDataAreRejected) {
       EXPECT_CONTAINS(std::string(e.what()), "vertices, the file holds");
     }
   }
-  EXPECT_CONTAINS(import_error("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off"), "counts 2 faces, the file holds 1");
+  EXPECT_CONTAINS(import_error("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off"),
+                  "counts 2 faces, the file holds 1");
 }
 
 TEST(MeshOff, MalformedFilesGetAClearError) {
   const std::string tri = "0 0 0\n1 0 0\n0 1 0\n";
   // assimp clamps an index past the vertices to the last one; this is an error.
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "3 0 1 7\n", "off"), "names vertex \"7\"; there are 3");
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n0 nan 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off"), "\"nan\" is not a finite number");
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n1e999 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off"), "is not a finite number");
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "10 0 1 2 0 1 2 0 1 2 0\n", "off"), "3 to 9");  // assimp drops it
+  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "3 0 1 7\n", "off"),
+                  "names vertex \"7\"; there are 3");
+  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n0 nan 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off"),
+                  "\"nan\" is not a finite number");
+  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n1e999 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off"),
+                  "is not a finite number");
+  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "10 0 1 2 0 1 2 0 1 2 0\n", "off"),
+                  "3 to 9");  // assimp drops it
   EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "3 0 1\n", "off"), "names fewer than 3");
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "3 0 1 2\n0 0 0\n", "off"), "holds more than");
+  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "3 0 1 2\n0 0 0\n", "off"),
+                  "holds more than");
   // Counts are tokens (as assimp reads them): a missing edge count takes the first coordinate.
-  EXPECT_CONTAINS(import_error("OFF\n3 1\n" + tri + "3 0 1 2\n", "off"), "vertex 0 needs 3 numbers");
+  EXPECT_CONTAINS(import_error("OFF\n3 1\n" + tri + "3 0 1 2\n", "off"),
+                  "vertex 0 needs 3 numbers");
   EXPECT_CONTAINS(import_error("OFF\n99999999999 1 0\n", "off"), "three counts");
   EXPECT_CONTAINS(import_error("3 1 0\n" + tri + "3 0 1 2\n", "off"), "must start with OFF");
   // A line of 4096 characters or more would overflow assimp's line buffer.
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n0 0 0" + std::string(5000, ' ') + "\n1 0 0\n0 1 0\n3 0 1 2\n", "off"),
-                  "longer than 4000 characters");
+  EXPECT_CONTAINS(
+      import_error("OFF\n3 1 0\n0 0 0" + std::string(5000, ' ') + "\n1 0 0\n0 1 0\n3 0 1 2\n",
+                   "off"),
+      "longer than 4000 characters");
   const char with_nul[] = "OFF\n3 1 0\n0 0 0\0\n1 0 0\n0 1 0\n3 0 1 2\n";
   EXPECT_CONTAINS(import_error(std::string(with_nul, sizeof with_nul - 1), "off"), "NUL");
 }
 
 TEST(MeshPly, MalformedFilesGetAClearError) {
-  const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                             "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
   const std::string tri = "0 0 0\n1 0 0\n0 1 0\n";
   // Found by fuzz_mesh: a face row that is not a number left a face with no indices and primitive
   // types that disagreed with the faces; assimp's triangulation asserted and aborted the process.
-  EXPECT_CONTAINS(import_error(header + tri + "3 0 1 2\nz\n", "ply"), "does not match the header's properties");
+  EXPECT_CONTAINS(import_error(header + tri + "3 0 1 2\nz\n", "ply"),
+                  "does not match the header's properties");
   // Found by fuzz_mesh: a header with no end_header made assimp's PLY reader loop without end.
-  EXPECT_CONTAINS(import_error("ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\n1 0 0\n", "ply"), "no end_header");
-  EXPECT_CONTAINS(import_error(header + tri + "3 0 1 2\n", "ply"), "element 1 has 1 rows, its header says 2");
-  EXPECT_CONTAINS(import_error(header + tri + "3 0 1 2\n3 0 1 9\n", "ply"), "is out of range");  // assimp's own validation
-  EXPECT_CONTAINS(import_error(header + "0 inf 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n", "ply"), "does not match");
-  EXPECT_CONTAINS(import_error("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nnonsense\nend_header\n", "ply"),
-                  "not a PLY header keyword");
+  EXPECT_CONTAINS(
+      import_error("ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\n1 0 0\n", "ply"),
+      "no end_header");
+  EXPECT_CONTAINS(import_error(header + tri + "3 0 1 2\n", "ply"),
+                  "element 1 has 1 rows, its header says 2");
+  EXPECT_CONTAINS(import_error(header + tri + "3 0 1 2\n3 0 1 9\n", "ply"),
+                  "is out of range");  // assimp's own validation
+  EXPECT_CONTAINS(import_error(header + "0 inf 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n", "ply"),
+                  "does not match");
+  EXPECT_CONTAINS(
+      import_error(
+          "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nnonsense\nend_header\n",
+          "ply"),
+      "not a PLY header keyword");
   // Counts far beyond the data: refused before anything is allocated for them.
-  std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
-                       "property float y\nproperty float z\nend_header\n" + std::string(36, '\0');
+  std::string binary =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
+      "property float y\nproperty float z\nend_header\n" +
+      std::string(36, '\0');
   EXPECT_CONTAINS(import_error(binary, "ply"), "data ends inside row 3");
-  std::string list = "ply\nformat binary_little_endian 1.0\nelement face 1\nproperty list uchar int vertex_indices\n"
-                     "end_header\n\xff" + std::string(8, '\0');
+  std::string list =
+      "ply\nformat binary_little_endian 1.0\nelement face 1\nproperty list uchar int "
+      "vertex_indices\n"
+      "end_header\n\xff" +
+      std::string(8, '\0');
   EXPECT_CONTAINS(import_error(list, "ply"), "data ends inside row 0 of element 0");
 }
 
@@ -267,11 +311,14 @@ TEST(Mesh, FacesNamingMissingVerticesAreRejected) {
 TEST(Mesh, MtllibOutsideTheFileIsNotOpened) {
   auto dir = test::scratch_dir("mesh_mtllib");
   ASSERT_EQ(::mkfifo((dir / "blocks.mtl").c_str(), 0600), 0);
-  for (std::string lib : {std::string("blocks.mtl"), (dir / "blocks.mtl").string(), std::string("../../../../../../../../etc/passwd")}) {
-    auto path = test::write_file(dir / "cube.obj", "mtllib " + lib + "\nusemtl steel\n" + cube_obj());
+  for (std::string lib : {std::string("blocks.mtl"), (dir / "blocks.mtl").string(),
+                          std::string("../../../../../../../../etc/passwd")}) {
+    auto path =
+        test::write_file(dir / "cube.obj", "mtllib " + lib + "\nusemtl steel\n" + cube_obj());
     bool timed_out = false;
     auto triangles = std::make_shared<size_t>(0);
-    auto error = error_within([triangles, path] { *triangles = load_mesh(path).triangle_count(); }, 10, &timed_out);
+    auto error = error_within([triangles, path] { *triangles = load_mesh(path).triangle_count(); },
+                              10, &timed_out);
     ASSERT_FALSE(timed_out) << "the import of an OBJ with mtllib " << lib << " blocked";
     EXPECT_FALSE(error.has_value()) << *error;
     EXPECT_EQ(*triangles, 12u);
@@ -288,13 +335,15 @@ TEST(Mesh, MtllibOutsideTheFileIsNotOpened) {
 TEST(Mesh, FuzzCorpusCubesLoadInEveryFormat) {
   const char* formats[] = {"obj", "off", "ply", "stl", "glb"};
   int loaded = 0;
-  for (const auto& e : std::filesystem::directory_iterator(test::source_path("tests/fuzz/corpus/mesh"))) {
+  for (const auto& e :
+       std::filesystem::directory_iterator(test::source_path("tests/fuzz/corpus/mesh"))) {
     std::string name = e.path().filename().string();
     if (name.rfind("cube", 0) != 0 && name.rfind("quads", 0) != 0) continue;
     std::ifstream in(e.path(), std::ios::binary);
     std::string bytes((std::istreambuf_iterator<char>(in)), {});
     ASSERT_FALSE(bytes.empty());
-    Mesh m = load_mesh_bytes(std::string_view(bytes).substr(1), formats[uint8_t(bytes[0]) % 5], name);
+    Mesh m =
+        load_mesh_bytes(std::string_view(bytes).substr(1), formats[uint8_t(bytes[0]) % 5], name);
     EXPECT_EQ(m.triangle_count(), 12u) << name;
     EXPECT_TRUE(check_watertight(m).watertight()) << name;
     EXPECT_NEAR(std::abs(m.volume()), 1.0, 1e-6) << name;
@@ -304,7 +353,8 @@ TEST(Mesh, FuzzCorpusCubesLoadInEveryFormat) {
 }
 
 TEST(Mesh, UnknownFormatsAndOversizedFilesAreRefused) {
-  EXPECT_CONTAINS(import_error(cube_obj(), "nosuchformat"), "no importer reads .nosuchformat files");
+  EXPECT_CONTAINS(import_error(cube_obj(), "nosuchformat"),
+                  "no importer reads .nosuchformat files");
   MeshLimits small;
   small.max_bytes = 100;
   EXPECT_THROW(load_mesh_bytes(cube_obj(), "obj", "upload", small), std::runtime_error);

@@ -52,20 +52,28 @@ TEST(Scene, EachBadFieldGivesItsMessage) {
       {"/mesh/colour", 1, "scene.mesh.colour: is not a known field"},
       {"/medium/sigma_s", nlohmann::json::array({1, -2, 1}),
        "scene.medium.sigma_s[1]: must be in [0, 1e+06], got -2"},
-      {"/medium/sigma_a", "lots", "scene.medium.sigma_a: must be an array of 3 numbers, got \"lots\""},
+      {"/medium/sigma_a", "lots",
+       "scene.medium.sigma_a: must be an array of 3 numbers, got \"lots\""},
       {"/medium/g", 1.0, "scene.medium.g: must be in [-0.999, 0.999], got 1"},
       {"/medium/ior", 0.5, "scene.medium.ior: must be in [1, 4], got 0.5"},
-      {"/medium/density", {{"type", "fog"}},
-       "scene.medium.density.type: must be one of constant, layers, noise, grid, blocker; got \"fog\""},
-      {"/medium/density", {{"type", "layers"}, {"values", nlohmann::json::array()}},
+      {"/medium/density",
+       {{"type", "fog"}},
+       "scene.medium.density.type: must be one of constant, layers, noise, grid, blocker; got "
+       "\"fog\""},
+      {"/medium/density",
+       {{"type", "layers"}, {"values", nlohmann::json::array()}},
        "scene.medium.density.values: must have 1 to 64 elements, got 0"},
-      {"/medium/density", {{"type", "noise"}, {"min", 2}, {"max", 1}},
+      {"/medium/density",
+       {{"type", "noise"}, {"min", 2}, {"max", 1}},
        "scene.medium.density.max: must not be below min"},
-      {"/lights/0/type", "area", "scene.lights[0].type: must be one of point, directional, spot; got \"area\""},
-      {"/lights/0/direction", nlohmann::json::array({0, 0, 0}), "scene.lights[0].direction: must not be zero"},
+      {"/lights/0/type", "area",
+       "scene.lights[0].type: must be one of point, directional, spot; got \"area\""},
+      {"/lights/0/direction", nlohmann::json::array({0, 0, 0}),
+       "scene.lights[0].direction: must not be zero"},
       {"/lights/0/irradiance", -3, "scene.lights[0].irradiance: must be in [0, 1e+09], got -3"},
       {"/camera/fov_deg", 180, "scene.camera.fov_deg: must be in [1, 170], got 180"},
-      {"/camera/target", nlohmann::json::array({0, 0, 4}), "scene.camera.target: must differ from position"},
+      {"/camera/target", nlohmann::json::array({0, 0, 4}),
+       "scene.camera.target: must differ from position"},
       {"/camera/up", nlohmann::json::array({0, 0, 1}),
        "scene.camera.up: must not be parallel to the viewing direction"},
       {"/image/width", 100000, "scene.image.width: must be in [1, 8192], got 100000"},
@@ -122,7 +130,8 @@ TEST(Scene, MeshesThatBoundNoVolumeOrHoldBadNumbersAreRejected) {
   } catch (const ValidationError& e) {
     EXPECT_EQ(std::string(e.what()), "scene.mesh.file: mesh flat.obj encloses no volume");
   }
-  test::write_file(dir / "nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
+  test::write_file(dir / "nan.obj",
+                   "v nan 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
   s["mesh"] = {{"file", "nan.obj"}};
   try {
     parse_scene(s, dir);

@@ -5,7 +5,9 @@
 namespace scatter {
 namespace {
 
-Shape sphere() { return Shape{Shape::Kind::Sphere, {0.1, -0.2, 0.3}, 0.8}; }
+Shape sphere() {
+  return Shape{Shape::Kind::Sphere, {0.1, -0.2, 0.3}, 0.8};
+}
 Shape box() {
   Shape s;
   s.kind = Shape::Kind::Box;
@@ -39,8 +41,8 @@ TEST(Shapes, InsideTests) {
   EXPECT_FALSE(box().inside({0.5, 0.6, 0}));
   Shape t = torus();
   Vec3 u = normalize(cross(Vec3{1, 0, 0}, t.axis));
-  EXPECT_FALSE(t.inside({0, 0, 0}));           // the hole
-  EXPECT_TRUE(t.inside(u * 0.6));              // centre of the tube
+  EXPECT_FALSE(t.inside({0, 0, 0}));  // the hole
+  EXPECT_TRUE(t.inside(u * 0.6));     // centre of the tube
   EXPECT_FALSE(t.inside(u * 0.6 + t.axis * 0.21));
 }
 

@@ -8,7 +8,8 @@
 namespace scatter {
 namespace {
 
-Scene scene_with(const nlohmann::json& mesh, const nlohmann::json& density = {{"type", "constant"}}) {
+Scene scene_with(const nlohmann::json& mesh,
+                 const nlohmann::json& density = {{"type", "constant"}}) {
   nlohmann::json s = test::minimal_scene();
   s["mesh"] = mesh;
   s["medium"]["density"] = density;
@@ -24,8 +25,8 @@ TEST(Voxelizer, SphereVolumeWithinOnePercentAt128) {
 }
 
 TEST(Voxelizer, TorusVolumeWithinOnePercentAt128) {
-  Scene s = scene_with({{"shape", "torus"}, {"major_radius", 0.7}, {"minor_radius", 0.25},
-                        {"axis", {0.3, 1, 0.2}}});
+  Scene s = scene_with(
+      {{"shape", "torus"}, {"major_radius", 0.7}, {"minor_radius", 0.25}, {"axis", {0.3, 1, 0.2}}});
   VoxelGrid g = voxelize(s, {.resolution = 128});
   double exact = 2 * M_PI * M_PI * 0.7 * 0.25 * 0.25;
   EXPECT_NEAR(g.volume() / exact, 1.0, 0.01);
@@ -57,7 +58,8 @@ TEST(Voxelizer, ConcaveMeshesMatchTheirPolyhedralVolume) {
 
 TEST(Voxelizer, CoefficientsFollowDensityAndBlocker) {
   nlohmann::json box = {{"shape", "box"}, {"size", {2, 2, 2}}};
-  nlohmann::json blocker = {{"type", "blocker"}, {"sigma_a", 500},
+  nlohmann::json blocker = {{"type", "blocker"},
+                            {"sigma_a", 500},
                             {"shape", {{"shape", "sphere"}, {"radius", 0.5}}},
                             {"inner", {{"type", "constant"}, {"value", 2.0}}}};
   Scene s = scene_with(box, blocker);
@@ -66,7 +68,8 @@ TEST(Voxelizer, CoefficientsFollowDensityAndBlocker) {
     Vec3 q = (p - g.origin) / g.voxel;
     return g.index(int(q.x), int(q.y), int(q.z));
   };
-  size_t centre = at({0.01, 0.01, 0.01}), medium = at({0.8, 0.01, 0.01}), outside = at({1.02, 0, 0});
+  size_t centre = at({0.01, 0.01, 0.01}), medium = at({0.8, 0.01, 0.01}),
+         outside = at({1.02, 0, 0});
   EXPECT_FLOAT_EQ(g.sigma_a[3 * centre], 500.f);
   EXPECT_FLOAT_EQ(g.sigma_s[3 * centre], 0.f);
   EXPECT_FLOAT_EQ(g.sigma_s[3 * medium], 2.f);  // sigma_s 1 times density 2
@@ -97,7 +100,8 @@ namespace {
 
 Vec3 rotate(const Vec3& v, const Vec3& axis, double angle) {
   Vec3 k = normalize(axis);
-  return v * std::cos(angle) + cross(k, v) * std::sin(angle) + k * dot(k, v) * (1 - std::cos(angle));
+  return v * std::cos(angle) + cross(k, v) * std::sin(angle) +
+         k * dot(k, v) * (1 - std::cos(angle));
 }
 
 // Columns through the exact xy of vertices and edge midpoints: the line crosses shared edges and

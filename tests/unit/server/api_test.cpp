@@ -17,7 +17,8 @@ class ApiTest : public ::testing::Test {
     o.max_image = 512;
     return o;
   }
-  HttpResponse call(const std::string& method, const std::string& target, const std::string& body = "") {
+  HttpResponse call(const std::string& method, const std::string& target,
+                    const std::string& body = "") {
     return api_.handle({method, target, body, ""});
   }
   static nlohmann::json json(const HttpResponse& r) { return nlohmann::json::parse(r.body); }
@@ -68,11 +69,16 @@ TEST_F(ApiTest, PipelinesCarryTheirSettingsTables) {
 
 // A setting is checked at the edge against the table, whatever pipeline auto would pick.
 TEST_F(ApiTest, SettingsAreCheckedAtTheEdge) {
-  HttpResponse r = call("POST", "/api/render", R"({"scene_name": "sphere", "pipeline": "single", "settings": {"sampels": 10}})");
+  HttpResponse r =
+      call("POST", "/api/render",
+           R"({"scene_name": "sphere", "pipeline": "single", "settings": {"sampels": 10}})");
   EXPECT_EQ(r.status, 400);
   EXPECT_EQ(json(r)["field"], "settings.sampels");
-  r = call("POST", "/api/render", R"({"scene_name": "sphere", "pipeline": "auto", "settings": {"spp": 2}})");
-  EXPECT_EQ(r.status, 400);  // below reference's range, though auto picks thickness for the sphere's single term
+  r = call("POST", "/api/render",
+           R"({"scene_name": "sphere", "pipeline": "auto", "settings": {"spp": 2}})");
+  EXPECT_EQ(
+      r.status,
+      400);  // below reference's range, though auto picks thickness for the sphere's single term
   EXPECT_EQ(json(r)["field"], "settings.spp");
   r = call("POST", "/api/bakes", R"({"scene_name": "sphere", "pipeline": "psf"})");
   EXPECT_EQ(r.status, 400);
@@ -93,7 +99,8 @@ TEST_F(ApiTest, UnknownRoutesMethodsAndBodiesAreClearErrors) {
   r = call("POST", "/api/render", R"({"scene_name": "../etc/passwd"})");
   EXPECT_EQ(r.status, 400);
   EXPECT_EQ(json(r)["field"], "scene_name");
-  r = call("POST", "/api/render", R"({"scene": {"mesh": {"file": "/etc/passwd"}, "medium": {}, "lights": []}})");
+  r = call("POST", "/api/render",
+           R"({"scene": {"mesh": {"file": "/etc/passwd"}, "medium": {}, "lights": []}})");
   EXPECT_EQ(r.status, 400);
   EXPECT_EQ(json(r)["field"], "scene.mesh.file");
   r = call("POST", "/api/render", R"({"scene_name": "sphere", "colour": 1})");
@@ -122,7 +129,8 @@ TEST_F(ApiTest, TokenIsRequiredWhenSet) {
 }
 
 TEST_F(ApiTest, RendersImagesWithPlanAndTimings) {
-  nlohmann::json req = {{"scene", test::minimal_scene()}, {"pipeline", "surface"}, {"format", "png"}};
+  nlohmann::json req = {
+      {"scene", test::minimal_scene()}, {"pipeline", "surface"}, {"format", "png"}};
   HttpResponse r = call("POST", "/api/render", req.dump());
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_EQ(r.content_type, "image/png");
@@ -139,8 +147,10 @@ TEST_F(ApiTest, RendersImagesWithPlanAndTimings) {
   EXPECT_TRUE(json(r)["timings_ms"].contains("integrate"));
 
   std::string metrics = call("GET", "/metrics").body;
-  EXPECT_NE(metrics.find("scatter_frame_seconds_count{pipeline=\"auto\"} 1"), std::string::npos) << metrics;
-  EXPECT_NE(metrics.find("scatter_http_requests_total{route=\"/api/render\",status=\"200\"} 2"), std::string::npos);
+  EXPECT_NE(metrics.find("scatter_frame_seconds_count{pipeline=\"auto\"} 1"), std::string::npos)
+      << metrics;
+  EXPECT_NE(metrics.find("scatter_http_requests_total{route=\"/api/render\",status=\"200\"} 2"),
+            std::string::npos);
 }
 
 }  // namespace

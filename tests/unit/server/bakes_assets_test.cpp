@@ -81,10 +81,12 @@ TEST(ServerBakes, JobRunsToCompletionIsIdempotentAndCancels) {
     // Finished jobs cannot be cancelled; unknown ids and bad settings are clear errors.
     EXPECT_EQ(request(server->port(), http::verb::delete_, "/api/bakes/" + id).result_int(), 409);
     EXPECT_EQ(request(server->port(), http::verb::get, "/api/bakes/0000").result_int(), 404);
-    r = request(server->port(), http::verb::post, "/api/bakes", R"({"scene_name": "sphere", "settings": {"samplez": 1}})");
+    r = request(server->port(), http::verb::post, "/api/bakes",
+                R"({"scene_name": "sphere", "settings": {"samplez": 1}})");
     EXPECT_EQ(r.result_int(), 400);
     EXPECT_EQ(json(r)["field"], "settings.samplez");
-    r = request(server->port(), http::verb::post, "/api/bakes", R"({"scene_name": "sphere", "pipeline": "thickness"})");
+    r = request(server->port(), http::verb::post, "/api/bakes",
+                R"({"scene_name": "sphere", "pipeline": "thickness"})");
     EXPECT_EQ(r.result_int(), 400);
     EXPECT_EQ(json(r)["error"], "pipeline: pipeline thickness needs no bake");
     server->stop();
@@ -110,7 +112,9 @@ TEST(ServerBakes, JobRunsToCompletionIsIdempotentAndCancels) {
                 R"({"scene_name": "bunny", "settings": {"samples": 60000, "directions": 256}})");
     ASSERT_EQ(r.result_int(), 202);
     std::string big = json(r)["id"];
-    for (int i = 0; i < 400 && json(request(server->port(), http::verb::get, "/api/bakes/" + big))["state"] != "running"; ++i)
+    for (int i = 0; i < 400 && json(request(server->port(), http::verb::get,
+                                            "/api/bakes/" + big))["state"] != "running";
+         ++i)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     r = request(server->port(), http::verb::delete_, "/api/bakes/" + big);
     EXPECT_EQ(r.result_int(), 202);
@@ -123,7 +127,9 @@ TEST(ServerBakes, JobRunsToCompletionIsIdempotentAndCancels) {
     EXPECT_LT(status["progress"].get<double>(), 1.0);
     auto metrics = request(server->port(), http::verb::get, "/metrics").body();
     EXPECT_NE(metrics.find("scatter_bakes{state=\"cancelled\"} 1"), std::string::npos);
-    EXPECT_NE(metrics.find("scatter_bake_cache_lookups_total{result=\"disk_hit\"} 1"), std::string::npos) << metrics;
+    EXPECT_NE(metrics.find("scatter_bake_cache_lookups_total{result=\"disk_hit\"} 1"),
+              std::string::npos)
+        << metrics;
     server->stop();
     t.join();
   }
@@ -142,44 +148,62 @@ TEST(ServerAssets, UploadListAndRenderWithThem) {
   auto json = [](const auto& r) { return nlohmann::json::parse(r.body()); };
   const unsigned short port = server->port();
   // A unit cube, faces counter-clockwise seen from outside.
-  std::string cube = "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
-                     "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\n"
-                     "f 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
+  std::string cube =
+      "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+      "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\n"
+      "f 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
   auto r = request(port, http::verb::post, "/api/assets?kind=mesh&format=obj", cube);
   ASSERT_EQ(r.result_int(), 201) << r.body();
   std::string mesh_id = json(r)["id"];
   EXPECT_EQ(mesh_id, sha256_hex(cube));
   EXPECT_EQ(json(r)["triangles"], 12);
-  EXPECT_EQ(request(port, http::verb::post, "/api/assets?kind=mesh&format=obj", cube).result_int(), 200);
+  EXPECT_EQ(request(port, http::verb::post, "/api/assets?kind=mesh&format=obj", cube).result_int(),
+            200);
   std::string values(8 * sizeof(float), '\0');
   for (int i = 0; i < 8; ++i) {
     float v = 0.5f + i;
     std::memcpy(&values[i * sizeof(float)], &v, sizeof v);
   }
-  r = request(port, http::verb::post, "/api/assets?kind=grid&dims=2,2,2&bounds=-1,-1,-1,1,1,1", values);
+  r = request(port, http::verb::post, "/api/assets?kind=grid&dims=2,2,2&bounds=-1,-1,-1,1,1,1",
+              values);
   ASSERT_EQ(r.result_int(), 201) << r.body();
   std::string grid_id = json(r)["id"];
   auto list = json(request(port, http::verb::get, "/api/assets"))["assets"];
   EXPECT_EQ(list.size(), 2u);
   // Bad uploads: nothing is kept.
   auto files_before = std::distance(std::filesystem::directory_iterator(dir / "assets"), {});
-  EXPECT_EQ(request(port, http::verb::post, "/api/assets?kind=mesh&format=obj", "v 0 0 0\nf 1 1 1\n").result_int(), 400);
-  r = request(port, http::verb::post, "/api/assets?kind=mesh&format=obj", cube.substr(0, cube.rfind("f 2 7 6")));
+  EXPECT_EQ(
+      request(port, http::verb::post, "/api/assets?kind=mesh&format=obj", "v 0 0 0\nf 1 1 1\n")
+          .result_int(),
+      400);
+  r = request(port, http::verb::post, "/api/assets?kind=mesh&format=obj",
+              cube.substr(0, cube.rfind("f 2 7 6")));
   EXPECT_EQ(r.result_int(), 400);
   EXPECT_NE(json(r)["error"].get<std::string>().find("not watertight"), std::string::npos);
-  EXPECT_EQ(request(port, http::verb::post, "/api/assets?kind=mesh&format=exe", cube).result_int(), 400);
-  EXPECT_EQ(request(port, http::verb::post, "/api/assets?kind=grid&dims=2,2,3&bounds=-1,-1,-1,1,1,1", values).result_int(), 400);
-  EXPECT_EQ(request(port, http::verb::post, "/api/assets?kind=grid&dims=2,2&bounds=-1,-1,-1,1,1,1", values).result_int(), 400);
+  EXPECT_EQ(request(port, http::verb::post, "/api/assets?kind=mesh&format=exe", cube).result_int(),
+            400);
+  EXPECT_EQ(request(port, http::verb::post,
+                    "/api/assets?kind=grid&dims=2,2,3&bounds=-1,-1,-1,1,1,1", values)
+                .result_int(),
+            400);
+  EXPECT_EQ(request(port, http::verb::post, "/api/assets?kind=grid&dims=2,2&bounds=-1,-1,-1,1,1,1",
+                    values)
+                .result_int(),
+            400);
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir / "assets"), {}), files_before);
   // A scene made of the uploads renders.
   nlohmann::json scene = test::minimal_scene();
   scene["mesh"] = {{"asset", mesh_id}};
   scene["medium"]["density"] = {{"type", "grid"}, {"asset", grid_id}};
-  r = request(port, http::verb::post, "/api/render",
-              nlohmann::json({{"scene", scene}, {"pipeline", "reference"}, {"terms", "single"}, {"format", "json"}}).dump());
+  r = request(
+      port, http::verb::post, "/api/render",
+      nlohmann::json(
+          {{"scene", scene}, {"pipeline", "reference"}, {"terms", "single"}, {"format", "json"}})
+          .dump());
   EXPECT_EQ(r.result_int(), 200) << r.body();
   scene["mesh"] = {{"asset", std::string(64, 'a')}};
-  r = request(port, http::verb::post, "/api/render", nlohmann::json({{"scene", scene}, {"format", "json"}}).dump());
+  r = request(port, http::verb::post, "/api/render",
+              nlohmann::json({{"scene", scene}, {"format", "json"}}).dump());
   EXPECT_EQ(r.result_int(), 400);
   EXPECT_EQ(json(r)["field"], "scene.mesh.asset");
   server->stop();

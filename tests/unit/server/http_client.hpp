@@ -10,8 +10,9 @@ namespace beast = boost::beast;
 namespace http = beast::http;
 
 // A real HTTP client on loopback.
-inline http::response<http::string_body> request(unsigned short port, http::verb verb, const std::string& target,
-                                          const std::string& body = "") {
+inline http::response<http::string_body> request(unsigned short port, http::verb verb,
+                                                 const std::string& target,
+                                                 const std::string& body = "") {
   boost::asio::io_context io;
   beast::tcp_stream stream(io);
   stream.connect(boost::asio::ip::tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port));

@@ -40,7 +40,8 @@ TEST(MetricsTest, ProcessResidentMemoryIsAPlausibleGauge) {
 
 TEST(MetricsTest, ProcessStartTimeIsBeforeNowAndRecent) {
   double start = sample(Metrics().text(0), "process_start_time_seconds", "gauge");
-  double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  double now =
+      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   EXPECT_LE(start, now + 1);
   EXPECT_GT(start, now - 3600) << "the test process started within the hour";
 }

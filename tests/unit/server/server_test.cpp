@@ -36,7 +36,8 @@ TEST_F(ServerTest, ServesHealthAndRendersOverHttp) {
   auto r = request(server_->port(), http::verb::get, "/api/health");
   EXPECT_EQ(r.result_int(), 200);
   EXPECT_EQ(nlohmann::json::parse(r.body())["status"], "ok");
-  nlohmann::json req = {{"scene", test::minimal_scene()}, {"pipeline", "surface"}, {"format", "exr"}};
+  nlohmann::json req = {
+      {"scene", test::minimal_scene()}, {"pipeline", "surface"}, {"format", "exr"}};
   r = request(server_->port(), http::verb::post, "/api/render", req.dump());
   ASSERT_EQ(r.result_int(), 200) << r.body();
   EXPECT_EQ(r[http::field::content_type], "image/x-exr");
@@ -62,8 +63,10 @@ TEST_F(ServerTest, ConcurrentClientsAllGetAnswers) {
     clients.emplace_back([&, i] {
       auto r = i % 2 ? request(server_->port(), http::verb::get, "/api/health")
                      : request(server_->port(), http::verb::post, "/api/render",
-                               nlohmann::json{{"scene", test::minimal_scene()}, {"pipeline", "surface"},
-                                              {"format", "json"}}.dump());
+                               nlohmann::json{{"scene", test::minimal_scene()},
+                                              {"pipeline", "surface"},
+                                              {"format", "json"}}
+                                   .dump());
       ok += r.result_int() == 200;
     });
   for (auto& c : clients) c.join();
@@ -123,8 +126,10 @@ nlohmann::json hello() {
 
 nlohmann::json pose(int revision) {
   double a = revision * 0.01;
-  return {{"type", "camera"}, {"position", {4 * std::sin(a), 0.5, 4 * std::cos(a)}},
-          {"target", {0, 0, 0}}, {"revision", revision}};
+  return {{"type", "camera"},
+          {"position", {4 * std::sin(a), 0.5, 4 * std::cos(a)}},
+          {"target", {0, 0, 0}},
+          {"revision", revision}};
 }
 
 TEST_F(ServerTest, WebSocketStreamsFramesAndTheLatestPoseWins) {
@@ -148,7 +153,7 @@ TEST_F(ServerTest, WebSocketStreamsFramesAndTheLatestPoseWins) {
     c.send({{"type", "ack"}, {"frame", h["frame"]}});
   }
   EXPECT_EQ(last, 100);
-  EXPECT_LE(frames, 3);  // far fewer frames than poses
+  EXPECT_LE(frames, 3);           // far fewer frames than poses
   EXPECT_EQ(h["reduced"], true);  // cheaper frames while the camera moves
   EXPECT_EQ(h["width"], 32);
   // The view stays still: one full-size frame refines it.

@@ -20,12 +20,17 @@ using namespace test_http;
 using Clock = std::chrono::steady_clock;
 namespace websocket = boost::beast::websocket;
 
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
 
 // A render that runs for many seconds on this CPU but stops at its next pass when cancelled.
 nlohmann::json long_render() {
-  return {{"scene", test::minimal_scene()}, {"pipeline", "reference"}, {"terms", "all"},
-          {"format", "json"}, {"settings", {{"spp", 100000}}}};
+  return {{"scene", test::minimal_scene()},
+          {"pipeline", "reference"},
+          {"terms", "all"},
+          {"format", "json"},
+          {"settings", {{"spp", 100000}}}};
 }
 
 class ServiceTest : public ::testing::Test {
@@ -54,7 +59,9 @@ class ServiceTest : public ::testing::Test {
   // Waits until the render thread has a job running (GET /api/health's "busy").
   void wait_busy() {
     for (int i = 0; i < 500; ++i) {
-      if (nlohmann::json::parse(request(port(), http::verb::get, "/api/health").body())["render_busy"] == true) return;
+      if (nlohmann::json::parse(
+              request(port(), http::verb::get, "/api/health").body())["render_busy"] == true)
+        return;
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     FAIL() << "the render thread never started the long render";
@@ -88,7 +95,10 @@ TEST_F(ServiceTest, QuickRoutesAndValidationErrorsAnswerAtOnceWhileARenderRuns) 
   wait_busy();
   std::vector<double> ms;
   for (int i = 0; i < 100; ++i) {
-    const char* target = i % 4 == 0 ? "/api/health" : i % 4 == 1 ? "/metrics" : i % 4 == 2 ? "/api/bakes" : "/api/assets";
+    const char* target = i % 4 == 0   ? "/api/health"
+                         : i % 4 == 1 ? "/metrics"
+                         : i % 4 == 2 ? "/api/bakes"
+                                      : "/api/assets";
     auto t = Clock::now();
     EXPECT_EQ(request(port(), http::verb::get, target).result_int(), 200) << target;
     ms.push_back(ms_since(t));
@@ -115,7 +125,8 @@ TEST_F(ServiceTest, AClientThatLeavesCancelsItsRender) {
   auto t = Clock::now();
   // The render thread is free again soon: a small render after it is answered in seconds, not
   // after the minutes the abandoned one would take.
-  auto r = post("/api/render", {{"scene", test::minimal_scene()}, {"pipeline", "surface"}, {"format", "json"}});
+  auto r = post("/api/render",
+                {{"scene", test::minimal_scene()}, {"pipeline", "surface"}, {"format", "json"}});
   EXPECT_EQ(r.result_int(), 200) << r.body();
   EXPECT_LT(ms_since(t), 20000);
   EXPECT_EQ(metric("scatter_renders_cancelled_total"), 1);
@@ -136,7 +147,8 @@ TEST(RenderJob, ARenderPastItsTimeLimitIsStopped) {
   RenderQueue queue(gpu::GpuOptions{});
   Metrics metrics;
   FrameSpec f;
-  f.scene = std::make_shared<const Scene>(parse_scene(test::minimal_scene(), test::source_path("scenes")));
+  f.scene = std::make_shared<const Scene>(
+      parse_scene(test::minimal_scene(), test::source_path("scenes")));
   f.pipeline = "reference";
   f.terms = "all";
   f.settings = {{"spp", 100000}};
@@ -156,12 +168,14 @@ TEST_F(ServiceTest, CostlyRequestsAreRefusedNamingTheFieldAndTheLimit) {
   scene["voxels"] = 512;
   nlohmann::json light = scene["lights"][0];
   for (int i = 0; i < 15; ++i) scene["lights"].push_back(light);
-  auto r = post("/api/render", {{"scene", scene}, {"pipeline", "reference"}, {"settings", {{"spp", 3}}}});
+  auto r = post("/api/render",
+                {{"scene", scene}, {"pipeline", "reference"}, {"settings", {{"spp", 3}}}});
   ASSERT_EQ(r.result_int(), 413) << r.body();
   auto j = nlohmann::json::parse(r.body());
   EXPECT_EQ(j["field"], "scene.voxels");
   EXPECT_NE(j["error"].get<std::string>().find("--max-request-mb"), std::string::npos) << j.dump();
-  r = post("/api/render", {{"scene", scene}, {"pipeline", "thickness"}, {"settings", {{"shadow_size", 8192}}}});
+  r = post("/api/render",
+           {{"scene", scene}, {"pipeline", "thickness"}, {"settings", {{"shadow_size", 8192}}}});
   ASSERT_EQ(r.result_int(), 413) << r.body();
   EXPECT_EQ(nlohmann::json::parse(r.body())["field"], "settings.shadow_size");
   // The daemon is unharmed.
@@ -204,7 +218,8 @@ TEST_F(ServiceTest, ABakeDoesNotHoldRenders) {
   start(o);
   nlohmann::json scene = test::minimal_scene();
   scene["medium"]["density"] = {{"type", "noise"}};
-  auto bake = post("/api/bakes", {{"scene", scene}, {"pipeline", "single"},
+  auto bake = post("/api/bakes", {{"scene", scene},
+                                  {"pipeline", "single"},
                                   {"settings", {{"samples", 60000}, {"directions", 128}}}});
   ASSERT_EQ(bake.result_int(), 202) << bake.body();
   std::string id = nlohmann::json::parse(bake.body())["id"];
@@ -213,7 +228,8 @@ TEST_F(ServiceTest, ABakeDoesNotHoldRenders) {
     if (s["state"] == "running") break;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  auto r = post("/api/render", {{"scene", test::minimal_scene()}, {"pipeline", "surface"}, {"format", "json"}});
+  auto r = post("/api/render",
+                {{"scene", test::minimal_scene()}, {"pipeline", "surface"}, {"format", "json"}});
   EXPECT_EQ(r.result_int(), 200);
   auto s = nlohmann::json::parse(request(port(), http::verb::get, "/api/bakes/" + id).body());
   EXPECT_EQ(s["state"], "running") << "the render waited for the bake: " << s.dump();
@@ -286,7 +302,8 @@ TEST_F(ServiceTest, PercentEncodedTokensMatch) {
   ServerOptions o;
   o.api.token = "a+b/c=d&e";
   start(o);
-  EXPECT_EQ(request(port(), http::verb::get, "/api/health?token=a%2Bb%2Fc%3Dd%26e").result_int(), 200);
+  EXPECT_EQ(request(port(), http::verb::get, "/api/health?token=a%2Bb%2Fc%3Dd%26e").result_int(),
+            200);
   EXPECT_EQ(request(port(), http::verb::get, "/api/health?token=a+b/c=d").result_int(), 401);
   EXPECT_EQ(request(port(), http::verb::get, "/api/health").result_int(), 401);
   EXPECT_NO_THROW(Ws(port(), std::string("/api/ws?token=a%2Bb%2Fc%3Dd%26e")));

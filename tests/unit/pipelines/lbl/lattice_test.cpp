@@ -12,11 +12,14 @@
 namespace scatter::lbl {
 namespace {
 
-gpu::ClContext& cl() { return test::shared_gpu().cl(); }
+gpu::ClContext& cl() {
+  return test::shared_gpu().cl();
+}
 
 // Coefficients for an n^3 grid; `scatter(i, j, k)` gives (pt, ps) per node, the same for all
 // channels; w = ps.
-LatticeCoefficients coefficients(int n, const std::function<std::pair<float, float>(int, int, int)>& f) {
+LatticeCoefficients coefficients(int n,
+                                 const std::function<std::pair<float, float>(int, int, int)>& f) {
   LatticeCoefficients c;
   c.nx = c.ny = c.nz = n;
   size_t count = size_t(n) * n * n;
@@ -49,13 +52,15 @@ std::vector<float> random_state(size_t nodes, unsigned seed, int directions = 6)
 }
 
 LatticeOptions closed(bool blocked, int inner = 1) {
-  return {.blocked = blocked, .block = 4, .inner = inner,
+  return {.blocked = blocked,
+          .block = 4,
+          .inner = inner,
           .edges = {Edge::Reflect, Edge::Reflect, Edge::Reflect}};
 }
 
 // The global step on the CPU, in double: f_d(r) = (1 - pt) a_d + ps/6 sum a + src/6.
-void cpu_step(const LatticeCoefficients& c, const std::vector<float>& src, const std::array<Edge, 3>& edges,
-              std::vector<double>& f, std::vector<double>& irr) {
+void cpu_step(const LatticeCoefficients& c, const std::vector<float>& src,
+              const std::array<Edge, 3>& edges, std::vector<double>& f, std::vector<double>& irr) {
   const int dims[3] = {c.nx, c.ny, c.nz};
   const size_t n = size_t(c.nx) * c.ny * c.nz;
   std::vector<double> out(f.size());
@@ -76,15 +81,17 @@ void cpu_step(const LatticeCoefficients& c, const std::vector<float>& src, const
           }
           size_t sn = (size_t(s[2]) * c.ny + s[1]) * c.nx + s[0];
           for (int ch = 0; ch < 3; ++ch)
-            a[d][ch] = !outside ? f[(d * 3 + ch) * n + sn]
-                                : (edges[axis] == Edge::Reflect ? f[((d ^ 1) * 3 + ch) * n + node] : 0.0);
+            a[d][ch] =
+                !outside ? f[(d * 3 + ch) * n + sn]
+                         : (edges[axis] == Edge::Reflect ? f[((d ^ 1) * 3 + ch) * n + node] : 0.0);
         }
         for (int ch = 0; ch < 3; ++ch) {
           double sum = 0;
           for (int d = 0; d < 6; ++d) sum += a[d][ch];
           double pt = c.pt[3 * node + ch], ps = c.ps[3 * node + ch];
           for (int d = 0; d < 6; ++d)
-            out[(d * 3 + ch) * n + node] = (1 - pt) * a[d][ch] + (ps * sum + src[3 * node + ch]) / 6;
+            out[(d * 3 + ch) * n + node] =
+                (1 - pt) * a[d][ch] + (ps * sum + src[3 * node + ch]) / 6;
           irr[3 * node + ch] = c.w[3 * node + ch] * sum;
         }
       }
@@ -179,8 +186,10 @@ TEST(LblLattice, KernelsMatchACpuStep) {
       l.set_source(src);
       l.step(6);
       std::vector<float> got = l.state(), got_irr = l.irradiance();
-      for (size_t i = 0; i < f.size(); ++i) ASSERT_NEAR(got[i], f[i], 1e-5 * (1 + std::abs(f[i]))) << i;
-      for (size_t i = 0; i < irr.size(); ++i) ASSERT_NEAR(got_irr[i], irr[i], 1e-5 * (1 + std::abs(irr[i]))) << i;
+      for (size_t i = 0; i < f.size(); ++i)
+        ASSERT_NEAR(got[i], f[i], 1e-5 * (1 + std::abs(f[i]))) << i;
+      for (size_t i = 0; i < irr.size(); ++i)
+        ASSERT_NEAR(got_irr[i], irr[i], 1e-5 * (1 + std::abs(irr[i]))) << i;
     }
   }
 }
@@ -255,7 +264,8 @@ TEST(LblLattice, EighteenDirectionsAreMoreIsotropic) {
   const int n = 24, c0 = 12;
   auto c = coefficients(n, [](int, int, int) { return std::pair{0.4f, 0.36f}; });
   for (size_t i = 0; i < c.pt.size(); ++i) {
-    c.pt_diag[i] = 1 - std::pow(1 - c.pt[i], std::sqrt(2.f));  // the same medium, sqrt(2) longer steps
+    c.pt_diag[i] =
+        1 - std::pow(1 - c.pt[i], std::sqrt(2.f));  // the same medium, sqrt(2) longer steps
     c.ps_diag[i] = c.pt_diag[i] * 0.9f;
     c.w_diag[i] = c.ps_diag[i] / 0.4f * c.pt[i] / std::sqrt(2.f);
   }
@@ -277,9 +287,12 @@ TEST(LblLattice, EighteenDirectionsAreMoreIsotropic) {
 TEST(LblLattice, RejectsBadShapes) {
   auto c = coefficients(6, [](int, int, int) { return std::pair{0.1f, 0.1f}; });
   EXPECT_THROW(Lattice(cl(), c, {.blocked = true, .block = 4}), std::invalid_argument);
-  EXPECT_THROW(Lattice(cl(), c, {.blocked = true, .block = 2, .edges = {Edge::Periodic, Edge::Open, Edge::Open}}),
+  EXPECT_THROW(
+      Lattice(cl(), c,
+              {.blocked = true, .block = 2, .edges = {Edge::Periodic, Edge::Open, Edge::Open}}),
+      std::invalid_argument);
+  EXPECT_THROW(Lattice(cl(), c, {.blocked = true, .block = 2, .directions = 18}),
                std::invalid_argument);
-  EXPECT_THROW(Lattice(cl(), c, {.blocked = true, .block = 2, .directions = 18}), std::invalid_argument);
   EXPECT_THROW(Lattice(cl(), c, {.blocked = false, .directions = 7}), std::invalid_argument);
 }
 

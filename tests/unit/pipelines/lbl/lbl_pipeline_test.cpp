@@ -43,7 +43,6 @@ TEST(LblPipeline, SingleTermMatchesClosedFormOnTheAxis) {
   }
 }
 
-
 Scene sphere(int size, int voxels) {
   Scene s = load_scene(test::source_path("scenes/sphere.json"));
   s.width = s.height = size;
@@ -80,7 +79,8 @@ TEST(LblPipeline, CameraOnlyChangeRunsOnlyTheViewPass) {
   }
   RenderResult moved = p.render(s, {Terms::All, {}});
   EXPECT_EQ(p.last_diffusion_steps(), 0);
-  for (const auto& t : moved.timings) EXPECT_TRUE(t.stage == "view" || t.stage == "readback") << t.stage;
+  for (const auto& t : moved.timings)
+    EXPECT_TRUE(t.stage == "view" || t.stage == "readback") << t.stage;
   // The kept state gives the image a fresh pipeline computes.
   LblPipeline fresh(test::shared_gpu());
   Image expected = fresh.render(s, {Terms::All, {}}).image;
@@ -174,7 +174,9 @@ TEST(LblPipeline, SurfaceTermIsTheShadowedSurface) {
   EXPECT_TRUE(plan.stages[1].run);  // shadow maps
   RenderResult r = p.render(s, {Terms::Surface, {}});
   EXPECT_EQ(r.plan.pipeline, "lbl");
-  Image expected = make_pipeline("surface", test::shared_gpu())->render(s, {Terms::Surface, {{"shadows", 1}}}).image;
+  Image expected = make_pipeline("surface", test::shared_gpu())
+                       ->render(s, {Terms::Surface, {{"shadows", 1}}})
+                       .image;
   ASSERT_EQ(r.image.rgb.size(), expected.rgb.size());
   double sum = 0;
   for (size_t i = 0; i < expected.rgb.size(); ++i) {

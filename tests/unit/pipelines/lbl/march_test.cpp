@@ -9,7 +9,9 @@
 namespace scatter::lbl {
 namespace {
 
-gpu::ClContext& cl() { return test::shared_gpu().cl(); }
+gpu::ClContext& cl() {
+  return test::shared_gpu().cl();
+}
 
 // A 16^3 grid of voxels 0.1 wide whose inner 12^3 voxels hold a homogeneous medium.
 Volume box_volume(float sigma_s, float sigma_a) {
@@ -140,7 +142,6 @@ TEST(LblMarch, RaysCarryTheLightsPower) {
   EXPECT_GT(spot, 7 * 2 * pi * (1 - std::cos(5 * pi / 180)));
 }
 
-
 // n = a + k y: a ray leaving horizontally at y0 keeps n cos(theta) = n(y0) = C, and its path is
 // n(y(x)) = C cosh(k (x - x0) / C) (the paraxial limit is the parabola y0 + k (x - x0)^2 / (2 C)).
 // It bends towards the higher index; the explicit Euler steps converge to it at first order.
@@ -157,7 +158,8 @@ TEST(LblMarch, RayInALinearIndexGradientFollowsTheClosedForm) {
   std::vector<float> n(v.count());
   for (int z = 0; z < v.nz; ++z)
     for (int y = 0; y < v.ny; ++y)
-      for (int x = 0; x < v.nx; ++x) n[v.index(x, y, z)] = float(a + k * (v.origin.y + (y + 0.5) * v.voxel));
+      for (int x = 0; x < v.nx; ++x)
+        n[v.index(x, y, z)] = float(a + k * (v.origin.y + (y + 0.5) * v.voxel));
   set_index(v, n, 0);
   ASSERT_FALSE(v.constant_n);
   ClVolume dv = upload_volume(cl(), v);

@@ -45,19 +45,24 @@ TEST(PsfModel, WidthLimitingCases) {
   const double theta2 = 0.24, b = 2.0;
   // No absorption: w^2 = b <theta^2> S^3 / 24 (Tessendorf's), growing as S^3.
   for (double S : {0.5, 2.0, 40.0})
-    EXPECT_NEAR(blur_width2(theta2, b * S, S, 0.0, 0.0), b * theta2 * S * S * S / 24, 1e-12 * S * S * S);
+    EXPECT_NEAR(blur_width2(theta2, b * S, S, 0.0, 0.0), b * theta2 * S * S * S / 24,
+                1e-12 * S * S * S);
   EXPECT_NEAR(blur_width2(theta2, b * 4, 4, 0, 0) / blur_width2(theta2, b * 2, 2, 0, 0), 8.0, 1e-9);
-  // Long paths (S >> l, l^2 = 1 / (a b <theta^2>)): w^2 -> b <theta^2> S l^2 / 2 = S / (2a), linear in S.
+  // Long paths (S >> l, l^2 = 1 / (a b <theta^2>)): w^2 -> b <theta^2> S l^2 / 2 = S / (2a), linear
+  // in S.
   const double a = 0.01, l = 1 / std::sqrt(a * b * theta2);
   for (double S : {1e4 * l, 1e5 * l}) {  // the ratio is 1 - 12 l^2 / S^2 + ...
     double w2 = blur_width2(theta2, b * S, S, a / b, 0.0);
     EXPECT_NEAR(w2 / (b * theta2 * S * l * l / 2), 1.0, 1e-6);
   }
   double S = 1e4 * l;
-  EXPECT_NEAR(blur_width2(theta2, b * 2 * S, 2 * S, a / b, 0) / blur_width2(theta2, b * S, S, a / b, 0), 2.0, 1e-3);
+  EXPECT_NEAR(
+      blur_width2(theta2, b * 2 * S, 2 * S, a / b, 0) / blur_width2(theta2, b * S, S, a / b, 0),
+      2.0, 1e-3);
   // The 8/b shift: no blur before 8 scattering events, then the formula at S - 8/b.
   EXPECT_EQ(blur_width2(theta2, 7.9, 7.9 / b, 0, 8), 0.0);
-  EXPECT_NEAR(blur_width2(theta2, b * 10, 10, 0, 8), blur_width2(theta2, b * 10 - 8, 10 - 8 / b, 0, 0), 1e-12);
+  EXPECT_NEAR(blur_width2(theta2, b * 10, 10, 0, 8),
+              blur_width2(theta2, b * 10 - 8, 10 - 8 / b, 0, 0), 1e-12);
 }
 
 TEST(PsfModel, MultipleScatteringPhaseFunctionIntegratesToOne) {
@@ -84,12 +89,13 @@ TEST(PsfModel, MultipleScatteringPhaseFunctionIntegratesToOne) {
 }
 
 TEST(PsfModel, LevelWidthsAddUp) {
-  // Level k's Gaussian widths compose: stored_k^2 = stored_{k-1}^2 + tent variance + (sigma_k voxel_k)^2,
-  // and the trilinear reconstruction's 1/6 voxel^2 brings it to level_width(k).
+  // Level k's Gaussian widths compose: stored_k^2 = stored_{k-1}^2 + tent variance + (sigma_k
+  // voxel_k)^2, and the trilinear reconstruction's 1/6 voxel^2 brings it to level_width(k).
   for (int k = 1; k < 8; ++k) {
     double fine = std::ldexp(1.0, k - 1), coarse = 2 * fine, s = level_sigma(k) * coarse;
     double w0 = stored_width(k - 1);
-    EXPECT_NEAR(w0 * w0 + 0.75 * fine * fine + s * s + coarse * coarse / 6, std::pow(level_width(k), 2), 1e-9);
+    EXPECT_NEAR(w0 * w0 + 0.75 * fine * fine + s * s + coarse * coarse / 6,
+                std::pow(level_width(k), 2), 1e-9);
     EXPECT_GT(level_width(k), level_width(k - 1));
   }
 }
@@ -105,15 +111,18 @@ Volume3 random_volume(int nx, int ny, int nz, unsigned seed) {
 
 cl::Buffer upload4(gpu::ClContext& cl, const Volume3& v) {
   std::vector<cl_float4> d(v.rgb.size() / 3);
-  for (size_t i = 0; i < d.size(); ++i) d[i] = cl_float4{{v.rgb[3 * i], v.rgb[3 * i + 1], v.rgb[3 * i + 2], 0}};
-  return cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, d.size() * sizeof(cl_float4), d.data());
+  for (size_t i = 0; i < d.size(); ++i)
+    d[i] = cl_float4{{v.rgb[3 * i], v.rgb[3 * i + 1], v.rgb[3 * i + 2], 0}};
+  return cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                    d.size() * sizeof(cl_float4), d.data());
 }
 
 Volume3 level_of(gpu::ClContext& cl, const Pyramid& p, size_t k) {
   const cl_int4& L = p.layout[k];
   Volume3 v{L.s[1], L.s[2], L.s[3], {}};
   std::vector<cl_float4> d(size_t(v.nx) * v.ny * v.nz);
-  cl.queue().enqueueReadBuffer(p.data, CL_TRUE, size_t(L.s[0]) * sizeof(cl_float4), d.size() * sizeof(cl_float4), d.data());
+  cl.queue().enqueueReadBuffer(p.data, CL_TRUE, size_t(L.s[0]) * sizeof(cl_float4),
+                               d.size() * sizeof(cl_float4), d.data());
   for (const auto& x : d) v.rgb.insert(v.rgb.end(), {x.s[0], x.s[1], x.s[2]});
   return v;
 }
@@ -128,7 +137,8 @@ TEST(PsfPyramid, KernelsMatchTheCpuOperations) {
     if (k > 0) cpu = blur_gaussian(downsample_tent(cpu), level_sigma(static_cast<int>(k)));
     Volume3 gpu = level_of(cl, p, k);
     ASSERT_EQ(gpu.rgb.size(), cpu.rgb.size());
-    for (size_t i = 0; i < cpu.rgb.size(); ++i) ASSERT_NEAR(gpu.rgb[i], cpu.rgb[i], 1e-5) << "level " << k;
+    for (size_t i = 0; i < cpu.rgb.size(); ++i)
+      ASSERT_NEAR(gpu.rgb[i], cpu.rgb[i], 1e-5) << "level " << k;
     EXPECT_NEAR(p.width[k], 0.1 * level_width(static_cast<int>(k)), 1e-6);
   }
 }
@@ -164,7 +174,9 @@ TEST(PsfPyramid, LevelsApproximateADirectGaussianConvolution) {
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
         double r2 = std::pow(i - 20.0, 2) + std::pow(j - 24.0, 2) + std::pow(k - 26.0, 2);
-        float v = static_cast<float>(std::exp(-r2 / 18.0) + ((i > 26 && i < 34 && j > 14 && j < 34 && k > 16 && k < 32) ? 0.5 : 0));
+        float v = static_cast<float>(
+            std::exp(-r2 / 18.0) +
+            ((i > 26 && i < 34 && j > 14 && j < 34 && k > 16 && k < 32) ? 0.5 : 0));
         for (int c = 0; c < 3; ++c) src.rgb[3 * src.index(i, j, k) + c] = v * (1 + c);
       }
   Pyramid p = build_pyramid(cl, upload4(cl, src), n, n, n, 1.0f);

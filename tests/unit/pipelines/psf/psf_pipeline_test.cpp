@@ -21,7 +21,9 @@ constexpr double kPi = std::numbers::pi;
 
 using test::axis_box;
 
-float centre(const Image& im, int c) { return im.rgb[3 * (4 * 9 + 4) + c]; }
+float centre(const Image& im, int c) {
+  return im.rgb[3 * (4 * 9 + 4) + c];
+}
 
 TEST(PsfPipeline, SingleTermOnTheAxisMatchesClosedForm) {
   const double ss = 0.8, sa = 0.2, g = 0.3;
@@ -45,12 +47,15 @@ TEST(PsfPipeline, MultipleTermOnTheAxisMatchesTheModelOnTheCpu) {
     const int n = 20000;
     for (int i = 0; i < n; ++i) {
       double s = (i + 0.5) * 2.0 / n, ell = 2 * ss * s;
-      double f = std::exp(-2 * st * s) * ss * E * psf::pms(t, ell, kPi) * std::exp(-alpha * kPi * kPi / ell);
+      double f = std::exp(-2 * st * s) * ss * E * psf::pms(t, ell, kPi) *
+                 std::exp(-alpha * kPi * kPi / ell);
       sum += f * (atten == 0 ? std::exp(-st * s) : 1.0) * (2.0 / n);
     }
     PsfPipeline p(test::shared_gpu());
-    RenderResult r = p.render(axis_box(ss, sa, g), {Terms::Multiple, {{"shift", 100}, {"atten", atten}, {"step", 0.25}}});
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(centre(r.image, c), sum, 0.02 * sum) << "atten " << atten;
+    RenderResult r = p.render(
+        axis_box(ss, sa, g), {Terms::Multiple, {{"shift", 100}, {"atten", atten}, {"step", 0.25}}});
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(centre(r.image, c), sum, 0.02 * sum) << "atten " << atten;
   }
 }
 
@@ -67,7 +72,8 @@ TEST(PsfPipeline, SingleTermAgreesWithTheReferenceMarcher) {
   Image mine = p.render(s, {Terms::Single, {}}).image;
   Image ref = make_pipeline("reference", test::shared_gpu())->render(s, {Terms::Single, {}}).image;
   // The light volume is read trilinearly between voxel centres instead of marched exactly.
-  EXPECT_LT(relative_rmse(mine, ref, coverage_mask(s, voxelize(s, {.resolution = s.voxels}))), 0.02);
+  EXPECT_LT(relative_rmse(mine, ref, coverage_mask(s, voxelize(s, {.resolution = s.voxels}))),
+            0.02);
 }
 
 TEST(PsfPipeline, MultipleTermIsFiniteAndNonNegativeOnInhomogeneousScenes) {
@@ -102,10 +108,11 @@ TEST(PsfPipeline, KeepsLightVolumesAcrossCameraMovesAndRebuildsOnlyMovedLights) 
   EXPECT_FALSE(second.plan.stages[0].run);
   EXPECT_FALSE(second.plan.stages[1].run);  // light_volume
   EXPECT_FALSE(second.plan.stages[2].run);  // pyramid
-  s.lights[1].position = {-3, 2, 2};  // one light moves
+  s.lights[1].position = {-3, 2, 2};        // one light moves
   RenderResult third = p.render(s, {Terms::All, {}});
   EXPECT_EQ(p.light_builds(), 3);
-  EXPECT_NE(third.plan.stages[1].reason.find("1 of 2 lights"), std::string::npos) << third.plan.stages[1].reason;
+  EXPECT_NE(third.plan.stages[1].reason.find("1 of 2 lights"), std::string::npos)
+      << third.plan.stages[1].reason;
   // The same frame from a fresh pipeline: reusing volumes changes nothing.
   PsfPipeline fresh(test::shared_gpu());
   Image again = fresh.render(s, {Terms::All, {}}).image;
@@ -148,7 +155,8 @@ TEST(PsfPipeline, SkipsTheMultipleTermInAnOpticallyThinMedium) {
   RenderResult r = p.render(s, {Terms::Multiple, {}});
   bool said = false;
   for (const auto& st : r.plan.stages)
-    if (st.name == "march_multiple") said = !st.run && st.reason.find("optically thin") != std::string::npos;
+    if (st.name == "march_multiple")
+      said = !st.run && st.reason.find("optically thin") != std::string::npos;
   EXPECT_TRUE(said);
   for (float v : r.image.rgb) ASSERT_EQ(v, 0.f);
   EXPECT_LT(p.scattering_thickness(), 0.05);

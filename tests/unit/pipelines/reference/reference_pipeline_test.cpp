@@ -33,10 +33,13 @@ using test::axis_box_radiance;
 //   A = (1 - e^(-4 st)) / (2 st).
 double axis_box_dielectric(double sigma_s, double sigma_a, double g, double n) {
   double st = sigma_s + sigma_a, f0 = std::pow((n - 1) / (n + 1), 2);
-  auto hg = [&](double c) { return (1 - g * g) / (4 * std::numbers::pi * std::pow(1 + g * g - 2 * g * c, 1.5)); };
+  auto hg = [&](double c) {
+    return (1 - g * g) / (4 * std::numbers::pi * std::pow(1 + g * g - 2 * g * c, 1.5));
+  };
   double a = (1 - std::exp(-4 * st)) / (2 * st);
   double up = f0 * std::exp(-2 * st) * hg(1) * 2 * std::exp(-2 * st);
-  return (1 - f0) * (1 - f0) * sigma_s * 2.0 * (hg(-1) * a + up) / (1 - f0 * f0 * std::exp(-4 * st));
+  return (1 - f0) * (1 - f0) * sigma_s * 2.0 * (hg(-1) * a + up) /
+         (1 - f0 * f0 * std::exp(-4 * st));
 }
 
 TEST(ReferencePipeline, DielectricBoxMatchesClosedFormOnTheAxis) {
@@ -139,7 +142,7 @@ TEST(ReferencePipeline, MarcherAndMonteCarloAgreeOnShippedScenes) {
     }
     ASSERT_GT(n, 300);
     EXPECT_LT(outliers, n / 200 + 1);
-    EXPECT_LT(z2 / n, 1.5);                     // unit variance, with room for a noisy stderr
+    EXPECT_LT(z2 / n, 1.5);                         // unit variance, with room for a noisy stderr
     EXPECT_LT(std::abs(diff), 4 * std::sqrt(var));  // no bias in the sum over the image
   }
 }
@@ -163,7 +166,9 @@ TEST(ReferencePipeline, ExtremeMediaStayFinite) {
     for (double albedo : {0.0, 1.0})
       for (double g : {-0.99, 0.0, 0.99}) {
         nlohmann::json j = test::minimal_scene();
-        j["medium"] = {{"sigma_s", albedo * st}, {"sigma_a", (1 - albedo) * st}, {"g", g},
+        j["medium"] = {{"sigma_s", albedo * st},
+                       {"sigma_a", (1 - albedo) * st},
+                       {"g", g},
                        {"ior", st > 1 ? 1.5 : 1.0}};
         j["lights"].push_back({{"type", "point"}, {"position", {0.5, 2, 1}}, {"intensity", 5}});
         j["image"] = {{"width", 12}, {"height", 12}};
@@ -171,7 +176,8 @@ TEST(ReferencePipeline, ExtremeMediaStayFinite) {
         Scene s = parse_scene(j, ".");
         for (Terms t : {Terms::Single, Terms::All}) {
           RenderResult r = render(s, t, {{"spp", 4}, {"max_depth", 256}});
-          for (float v : r.image.rgb) ASSERT_TRUE(std::isfinite(v) && v >= 0) << st << " " << albedo << " " << g;
+          for (float v : r.image.rgb)
+            ASSERT_TRUE(std::isfinite(v) && v >= 0) << st << " " << albedo << " " << g;
           if (r.std_error) {
             for (float v : r.std_error->rgb) ASSERT_TRUE(std::isfinite(v));
           }

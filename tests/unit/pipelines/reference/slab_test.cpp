@@ -13,7 +13,9 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-SlabResult slab(SlabParams p) { return run_reference_slab(test::shared_gpu().cl(), p); }
+SlabResult slab(SlabParams p) {
+  return run_reference_slab(test::shared_gpu().cl(), p);
+}
 
 double hg(double cos_t, double g) {
   double d = 1 + g * g - 2 * g * cos_t;
@@ -45,24 +47,29 @@ void single_scattering(double tau, double a, double g, double mu0, double& R1, d
                 (1 - std::exp(-tau * (1 / mu + 1 / mu0)));
        });
   T1 = a * hemisphere([&](double mu, double phi) {
-         double k = std::abs(mu - mu0) < 1e-9 ? tau / mu0 * std::exp(-tau / mu0)
-                                               : mu / (mu - mu0) * (std::exp(-tau / mu) - std::exp(-tau / mu0));
+         double k = std::abs(mu - mu0) < 1e-9
+                        ? tau / mu0 * std::exp(-tau / mu0)
+                        : mu / (mu - mu0) * (std::exp(-tau / mu) - std::exp(-tau / mu0));
          return hg(cos_theta(mu, phi, false), g) * k;
        });
 }
 
 // Standard error of the mean of a tally that is `a` with probability m / a, else 0.
-double tally_se(double m, double a, double n) { return std::sqrt(std::max(0.0, a * m - m * m) / n); }
+double tally_se(double m, double a, double n) {
+  return std::sqrt(std::max(0.0, a * m - m * m) / n);
+}
 
 // van de Hulst's table value as quoted for the MCML validation: tau 2, albedo 0.9, g 0.75,
 // normal incidence, matched boundary: diffuse reflectance 0.09739, total transmittance 0.66096.
 TEST(ReferenceSlab, MatchesPublishedTable) {
-  SlabResult r = slab({.tau = 2, .albedo = 0.9, .g = 0.75, .mu0 = 1, .ior = 1, .photons = 2'000'000});
+  SlabResult r =
+      slab({.tau = 2, .albedo = 0.9, .g = 0.75, .mu0 = 1, .ior = 1, .photons = 2'000'000});
   EXPECT_NEAR(r.R_diffuse, 0.09739, 3 * r.R_stderr);
   EXPECT_NEAR(r.T, 0.66096, 3 * r.T_stderr);
   EXPECT_LT(r.R_stderr, 3e-4);
   EXPECT_EQ(r.R_specular, 0);
-  EXPECT_NEAR(r.T_direct, std::exp(-2.0), 4 * std::sqrt(std::exp(-2.0) * (1 - std::exp(-2.0)) / r.photons));
+  EXPECT_NEAR(r.T_direct, std::exp(-2.0),
+              4 * std::sqrt(std::exp(-2.0) * (1 - std::exp(-2.0)) / r.photons));
 }
 
 TEST(ReferenceSlab, SingleScatteringMatchesClosedForm) {
@@ -109,7 +116,8 @@ TEST(ReferenceSlab, AbsorbingSlabMatchesClosedForm) {
 TEST(ReferenceSlab, ConservativeSlabsConserveEnergy) {
   for (double n : {1.0, 1.33})
     for (double g : {0.0, 0.9}) {
-      SlabResult r = slab({.tau = 3, .albedo = 1, .g = g, .mu0 = 0.7, .ior = n, .photons = 200'000});
+      SlabResult r =
+          slab({.tau = 3, .albedo = 1, .g = g, .mu0 = 0.7, .ior = n, .photons = 200'000});
       EXPECT_NEAR(r.R + r.T, 1.0, 1e-4) << "n " << n << " g " << g;
     }
   // A half-space without absorption returns everything, but the time to return has a heavy tail:

@@ -20,10 +20,12 @@ TEST(SphericalHarmonics, BasisIsOrthonormal) {
   for (const Vec3& d : dirs) {
     sh_basis(d, kMaxShBands, y.data());
     for (int i = 0; i < c; ++i)
-      for (int j = 0; j < c; ++j) gram[size_t(i) * c + j] += double(y[i]) * y[j] * 4 * std::numbers::pi / n;
+      for (int j = 0; j < c; ++j)
+        gram[size_t(i) * c + j] += double(y[i]) * y[j] * 4 * std::numbers::pi / n;
   }
   for (int i = 0; i < c; ++i)
-    for (int j = 0; j < c; ++j) EXPECT_NEAR(gram[size_t(i) * c + j], i == j ? 1.0 : 0.0, 2e-3) << i << "," << j;
+    for (int j = 0; j < c; ++j)
+      EXPECT_NEAR(gram[size_t(i) * c + j], i == j ? 1.0 : 0.0, 2e-3) << i << "," << j;
 }
 
 // The textbook real SH (no Condon-Shortley phase) for a few functions of each band up to 4.
@@ -40,7 +42,8 @@ TEST(SphericalHarmonics, MatchesKnownFunctions) {
   EXPECT_NEAR(v[10], 2.890611442640554 * x * y * z, 1e-6);
   EXPECT_NEAR(v[12], 0.373176332590115 * z * (5 * z * z - 3), 1e-6);
   EXPECT_NEAR(v[20], 0.105785546915204 * (35 * z * z * z * z - 30 * z * z + 3), 1e-6);
-  EXPECT_NEAR(v[24], 0.625835735449176 * (x * x * (x * x - 3 * y * y) - y * y * (3 * x * x - y * y)), 1e-6);
+  EXPECT_NEAR(
+      v[24], 0.625835735449176 * (x * x * (x * x - 3 * y * y) - y * y * (3 * x * x - y * y)), 1e-6);
   EXPECT_THROW(sh_basis(d, kMaxShBands + 1, v), std::invalid_argument);
 }
 
@@ -57,7 +60,9 @@ TEST(SphericalHarmonics, FibonacciDirectionsAreUnitAndBalanced) {
 // A function inside the span of bands 0..3 is reconstructed by projection and evaluation, and a
 // higher band is removed by a lower-order projection.
 TEST(SphericalHarmonics, ProjectionReconstructsBandLimitedFunctions) {
-  auto f = [](const Vec3& d) { return 0.3 + 0.5 * d.x + 0.2 * (3 * d.z * d.z - 1) + 0.4 * d.x * d.y * d.z; };
+  auto f = [](const Vec3& d) {
+    return 0.3 + 0.5 * d.x + 0.2 * (3 * d.z * d.z - 1) + 0.4 * d.x * d.y * d.z;
+  };
   auto dirs = sphere_directions(1024);
   std::vector<float> values;
   for (const Vec3& d : dirs) values.push_back(float(f(d)));

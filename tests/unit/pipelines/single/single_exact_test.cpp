@@ -54,8 +54,10 @@ TEST_F(SinglePipelineTest, TransmittanceGradientKeepsADenseFaceItsLight) {
   Expected expected = reference_single(s);
   Settings on = {{"samples", 20000}, {"directions", 64}}, off = on;
   off["tr_gradient"] = 0;
-  double r_off = mean_ratio(pipeline().render(s, {Terms::Single, off, nullptr}).image, expected.image);
-  double r_on = mean_ratio(pipeline().render(s, {Terms::Single, on, nullptr}).image, expected.image);
+  double r_off =
+      mean_ratio(pipeline().render(s, {Terms::Single, off, nullptr}).image, expected.image);
+  double r_on =
+      mean_ratio(pipeline().render(s, {Terms::Single, on, nullptr}).image, expected.image);
   EXPECT_NEAR(r_on, 1.0, 0.06);
   EXPECT_LT(r_off, 0.85);
 }
@@ -71,8 +73,9 @@ TEST_F(SinglePipelineTest, TransmittanceGradientMatchesTheClosedForm) {
   s.camera.target = {0, 0, 0};
   s.camera.fov_deg = 4;
   s.lights = {{Light::Type::Directional, {}, Vec3{0, 0, -1}, {1, 1, 1}, 1}};
-  const double st = (s.medium.sigma_s.x + s.medium.sigma_a.x + s.medium.sigma_s.y + s.medium.sigma_a.y +
-                     s.medium.sigma_s.z + s.medium.sigma_a.z) / 3;
+  const double st = (s.medium.sigma_s.x + s.medium.sigma_a.x + s.medium.sigma_s.y +
+                     s.medium.sigma_a.y + s.medium.sigma_s.z + s.medium.sigma_a.z) /
+                    3;
   Settings on = {{"samples", 20000}, {"directions", 64}}, off = on;
   off["tr_gradient"] = 0;
   pipeline().render(s, {Terms::Single, off, nullptr});
@@ -119,7 +122,8 @@ TEST_F(SinglePipelineTest, ExactTransmittanceIsRecomputedOnlyForLightsThatMoved)
   SinglePipeline fresh(test::shared_gpu(), nullptr);
   Image expected = fresh.render(s, {Terms::Single, exact, nullptr}).image;
   ASSERT_EQ(moved.rgb.size(), expected.rgb.size());
-  for (size_t i = 0; i < moved.rgb.size(); ++i) ASSERT_NEAR(moved.rgb[i], expected.rgb[i], 1e-6 + 1e-5 * expected.rgb[i]);
+  for (size_t i = 0; i < moved.rgb.size(); ++i)
+    ASSERT_NEAR(moved.rgb[i], expected.rgb[i], 1e-6 + 1e-5 * expected.rgb[i]);
 }
 
 // The SH path after an exact frame of the same bake: the Gaussians the exact frame moved and
@@ -133,7 +137,8 @@ TEST_F(SinglePipelineTest, ShPathAfterAnExactFrameUsesTheSamplesOwnGaussians) {
   Image again = pipeline().render(s, {Terms::Single, kQuick, nullptr}).image;
   ASSERT_EQ(first.rgb.size(), again.rgb.size());
   double differs = 0;
-  for (size_t i = 0; i < first.rgb.size(); ++i) differs += std::abs(double(moved.rgb[i]) - first.rgb[i]);
+  for (size_t i = 0; i < first.rgb.size(); ++i)
+    differs += std::abs(double(moved.rgb[i]) - first.rgb[i]);
   EXPECT_GT(differs, 0);  // the exact frame did move something
   for (size_t i = 0; i < first.rgb.size(); ++i) ASSERT_EQ(first.rgb[i], again.rgb[i]) << i;
 }

@@ -95,5 +95,4 @@ class SinglePipelineTest : public ::testing::Test {
   }
 };
 
-
 }  // namespace scatter::single_test

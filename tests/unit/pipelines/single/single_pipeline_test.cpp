@@ -12,12 +12,12 @@
 #include <random>
 
 #include "../../test_util.hpp"
-#include "single_fixture.hpp"
 #include "bake/cache.hpp"
 #include "pipelines/metrics.hpp"
 #include "pipelines/reference/reference_pipeline.hpp"
 #include "pipelines/single/sh.hpp"
 #include "protocol/json_reader.hpp"
+#include "single_fixture.hpp"
 
 namespace scatter {
 namespace {
@@ -39,7 +39,8 @@ double box_exit(const Vec3& p, const Vec3& d, double h) {
 Scene aligned_box(double sigma_t) {
   nlohmann::json j = test::minimal_scene();
   j["mesh"] = {{"shape", "box"}, {"size", {2, 2, 2}}};
-  j["medium"] = {{"sigma_s", {0.5 * sigma_t, 0.7 * sigma_t, 0.9 * sigma_t}}, {"sigma_a", {0.5 * sigma_t, 0.3 * sigma_t, 0.1 * sigma_t}}};
+  j["medium"] = {{"sigma_s", {0.5 * sigma_t, 0.7 * sigma_t, 0.9 * sigma_t}},
+                 {"sigma_a", {0.5 * sigma_t, 0.3 * sigma_t, 0.1 * sigma_t}}};
   j["voxels"] = 16;
   return parse_scene(j, ".");
 }
@@ -57,7 +58,8 @@ TEST(SingleBake, SampleDepthsMatchExactChords) {
     for (size_t k = 0; k < dirs.size(); ++k) {
       double chord = box_exit({pos[3 * s], pos[3 * s + 1], pos[3 * s + 2]}, dirs[k], 1.0);
       for (int c = 0; c < 3; ++c)
-        ASSERT_NEAR(tau[(s * dirs.size() + k) * 3 + c], 2.0 * chord, 1e-4 * (1 + 2.0 * chord)) << s << " " << k;
+        ASSERT_NEAR(tau[(s * dirs.size() + k) * 3 + c], 2.0 * chord, 1e-4 * (1 + 2.0 * chord))
+            << s << " " << k;
     }
 }
 
@@ -77,14 +79,17 @@ TEST(SingleBake, FirstMomentMatchesCpuSum) {
         size_t v = grid.index(i, j, k);
         if (!grid.inside[v]) continue;
         Vec3 x = grid.center(i, j, k), expected{};
-        for (const Vec3& w : dirs) expected = expected + w * (std::exp(-1.5 * box_exit(x, w, 1.0)) * 4 * std::numbers::pi / dirs.size());
+        for (const Vec3& w : dirs)
+          expected = expected + w * (std::exp(-1.5 * box_exit(x, w, 1.0)) * 4 * std::numbers::pi /
+                                     dirs.size());
         Vec3 got{T[3 * v], T[3 * v + 1], T[3 * v + 2]};
         double e = length(got - expected);
         sq += e * e;
         ++n;
         scale = std::max(scale, length(expected));
         // Two voxels or more from every face: the bilinear upstream reads see no face there.
-        if (std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z)}) < 1 - 2 * grid.voxel) worst_deep = std::max(worst_deep, e);
+        if (std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z)}) < 1 - 2 * grid.voxel)
+          worst_deep = std::max(worst_deep, e);
       }
   ASSERT_GT(scale, 0.5);
   // Near faces and corners the trapezoid across a face-straddling upstream read errs by up to ~12 %
@@ -134,7 +139,8 @@ TEST(SingleBake, SigmaFitSharpensTheSplattedFieldAtLayerJumps) {
     return splatted_sigma_s_error(s, bake_single(test::shared_gpu().cl(), grid, p));
   };
   double mean_only = error(0), fitted = error(4);
-  std::printf("splatted sigma_s: relative RMSE %.3f (mean) -> %.3f (4 passes)\n", mean_only, fitted);
+  std::printf("splatted sigma_s: relative RMSE %.3f (mean) -> %.3f (4 passes)\n", mean_only,
+              fitted);
   // Measured 0.51 -> 0.42: at 6000 samples the Gaussians are as wide as a quarter of a layer,
   // so much of the error is the jumps' unavoidable smoothing; the passes must cut at least 10 %.
   EXPECT_LT(fitted, 0.9 * mean_only);
@@ -161,7 +167,8 @@ TEST(SingleBake, SerializationRoundTripsAndRejectsDamage) {
 TEST_F(SinglePipelineTest, ShadePassMatchesCpu) {
   Scene s = small_sphere();
   s.medium.g = 0.4;
-  s.lights.push_back({Light::Type::Spot, {-2, 3, 2}, normalize(Vec3{2, -3, -2}), {0.5, 1, 0.2}, 15, 10, 25});
+  s.lights.push_back(
+      {Light::Type::Spot, {-2, 3, 2}, normalize(Vec3{2, -3, -2}), {0.5, 1, 0.2}, 15, 10, 25});
   s.lights.push_back({Light::Type::Directional, {}, normalize(Vec3{0, -1, -1}), {1, 0.5, 0.5}, 2});
   pipeline().render(s, {Terms::Single, kQuick, nullptr});
   const SingleBake& b = *pipeline().current();
@@ -192,7 +199,8 @@ TEST_F(SinglePipelineTest, ShadePassMatchesCpu) {
           wl = normalize(to);
           e /= dot(to, to);
           if (l.type == Light::Type::Spot) {
-            double co = std::cos(l.outer_deg * std::numbers::pi / 180), ci = std::cos(l.inner_deg * std::numbers::pi / 180);
+            double co = std::cos(l.outer_deg * std::numbers::pi / 180),
+                   ci = std::cos(l.inner_deg * std::numbers::pi / 180);
             double t = std::clamp((dot(wl * -1.0, l.direction) - co) / (ci - co), 0.0, 1.0);
             e *= t * t * (3 - 2 * t);
           }
@@ -203,7 +211,8 @@ TEST_F(SinglePipelineTest, ShadePassMatchesCpu) {
       // The shader sums the 25-term harmonics in float: where a transmittance is small the terms
       // cancel, and the worst sample of this bake is 1.5e-4 off relatively (a wrong factor is off
       // by far more).
-      ASSERT_NEAR(shaded[4 * i + c], expected, 3e-4 * std::abs(expected) + 1e-9) << "sample " << i << " channel " << c;
+      ASSERT_NEAR(shaded[4 * i + c], expected, 3e-4 * std::abs(expected) + 1e-9)
+          << "sample " << i << " channel " << c;
     }
     ++checked;
   }
@@ -263,8 +272,8 @@ TEST_F(SinglePipelineTest, PlanNamesTheBakeAndItsReuse) {
 
 // The samples and their data (not the stage times, which differ between bakes).
 bool same_samples(const SingleBake& a, const SingleBake& b) {
-  return a.position == b.position && a.sigma == b.sigma && a.weight == b.weight && a.sigma_s == b.sigma_s &&
-         a.sh == b.sh;
+  return a.position == b.position && a.sigma == b.sigma && a.weight == b.weight &&
+         a.sigma_s == b.sigma_s && a.sh == b.sh;
 }
 
 TEST(SingleBakeCache, SecondBakeIsAByteIdenticalHitAndCorruptionIsRebaked) {

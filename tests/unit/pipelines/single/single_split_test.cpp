@@ -20,7 +20,8 @@ Scene layers(int voxels = 32) {
   return s;
 }
 
-SingleBake bake_layers(const VoxelGrid& grid, double split, int sigma_fit = 0, int weight_fit = 20) {
+SingleBake bake_layers(const VoxelGrid& grid, double split, int sigma_fit = 0,
+                       int weight_fit = 20) {
   SingleBakeParams p;
   p.samples = 6000;
   p.directions = 32;
@@ -82,14 +83,16 @@ TEST(SingleSplit, PiecesPartitionEachGaussianAlongTheInterface) {
     if (std::abs(pl[1]) > 0.995) {
       ++along_y;
       // The interfaces lie at multiples of 0.25 (scenes/layers.json), within a voxel.
-      double y = (pl[3] - pl[0] * c.x - pl[2] * c.z) / pl[1];  // the plane's height above the centre
+      double y =
+          (pl[3] - pl[0] * c.x - pl[2] * c.z) / pl[1];  // the plane's height above the centre
       EXPECT_NEAR(y, std::round(y / 0.25) * 0.25, 2.0 / 32) << "sample " << i;
     }
   }
   EXPECT_EQ(planes, split.split);
   EXPECT_GT(along_y, 0.9 * planes);
   for (const Vec3& x : interior_points(200))
-    EXPECT_NEAR(gaussian_sum(split, x), gaussian_sum(whole, x), 1e-4) << x.x << " " << x.y << " " << x.z;
+    EXPECT_NEAR(gaussian_sum(split, x), gaussian_sum(whole, x), 1e-4)
+        << x.x << " " << x.y << " " << x.z;
 }
 
 // Each side keeps its own scattering coefficient: the splatted field follows the jumps far
@@ -116,7 +119,8 @@ TEST_F(SinglePipelineTest, SplitBringsLayersCloserToTheReference) {
     return relative_rmse(img, expected.image, expected.mask);
   };
   double whole = error(0), split = error(2);
-  std::printf("layers 32^3 at 6000 samples: relative RMSE %.4f (whole) -> %.4f (split)\n", whole, split);
+  std::printf("layers 32^3 at 6000 samples: relative RMSE %.4f (whole) -> %.4f (split)\n", whole,
+              split);
   EXPECT_LT(split, 0.9 * whole);
 }
 

@@ -80,7 +80,8 @@ TEST(SurfacePipeline, PointLightAndSpecularAtTheCentre) {
   nlohmann::json j = test::minimal_scene();
   j["image"] = {{"width", 33}, {"height", 33}};  // odd: one pixel sits on the axis
   j["surface"] = {{"diffuse", 0.4}, {"specular", 0.2}, {"shininess", 32}};
-  j["lights"] = {{{"type", "point"}, {"position", {0, 0, 3}}, {"intensity", 8.0}, {"color", {1, 0.5, 0}}}};
+  j["lights"] = {
+      {{"type", "point"}, {"position", {0, 0, 3}}, {"intensity", 8.0}, {"color", {1, 0.5, 0}}}};
   Scene s = parse_scene(j, ".");
   SurfacePipeline p(test::shared_gpu());
   Vec3 got = p.render(s, {Terms::Surface}).image.at(16, 16);
@@ -94,8 +95,12 @@ TEST(SurfacePipeline, PointLightAndSpecularAtTheCentre) {
 TEST(SurfacePipeline, SpotLightConeCutsOff) {
   nlohmann::json j = test::minimal_scene();
   j["image"] = {{"width", 64}, {"height", 64}};
-  j["lights"] = {{{"type", "spot"}, {"position", {0, 0, 3}}, {"direction", {0, 0, -1}},
-                  {"intensity", 8.0}, {"inner_deg", 5}, {"outer_deg", 8}}};
+  j["lights"] = {{{"type", "spot"},
+                  {"position", {0, 0, 3}},
+                  {"direction", {0, 0, -1}},
+                  {"intensity", 8.0},
+                  {"inner_deg", 5},
+                  {"outer_deg", 8}}};
   Scene s = parse_scene(j, ".");
   SurfacePipeline p(test::shared_gpu());
   Image im = p.render(s, {Terms::Surface}).image;
@@ -123,9 +128,11 @@ TEST(SurfacePipeline, ShadowsLeaveAConvexObjectAsItWas) {
 // far side, which faces the light; the shadowed image is darker there and nowhere brighter.
 TEST(SurfacePipeline, ShadowsDarkenWhatTheObjectHidesFromTheLight) {
   nlohmann::json j = test::minimal_scene();
-  j["mesh"] = {{"shape", "torus"}, {"major_radius", 1.0}, {"minor_radius", 0.35}, {"axis", {0, 1, 0}}};
+  j["mesh"] = {
+      {"shape", "torus"}, {"major_radius", 1.0}, {"minor_radius", 0.35}, {"axis", {0, 1, 0}}};
   j["lights"] = {{{"type", "directional"}, {"direction", {0.95, -0.3, 0}}, {"irradiance", 2.0}}};
-  j["camera"] = {{"position", {0, 4, 0.01}}, {"target", {0, 0, 0}}, {"up", {0, 0, -1}}, {"fov_deg", 45}};
+  j["camera"] = {
+      {"position", {0, 4, 0.01}}, {"target", {0, 0, 0}}, {"up", {0, 0, -1}}, {"fov_deg", 45}};
   j["image"] = {{"width", 64}, {"height", 64}};
   Scene s = parse_scene(j, ".");
   SurfacePipeline p(test::shared_gpu());
@@ -137,7 +144,8 @@ TEST(SurfacePipeline, ShadowsDarkenWhatTheObjectHidesFromTheLight) {
     if (shadowed.rgb[i] < 0.5f * plain.rgb[i]) ++darker;
   }
   EXPECT_GT(darker, 3 * 20);  // at least 20 pixels (3 channels each) in shadow
-  EXPECT_LT(total(shadowed), 0.995 * total(plain));  // measured 0.987: the wall is a small part of the view
+  EXPECT_LT(total(shadowed),
+            0.995 * total(plain));  // measured 0.987: the wall is a small part of the view
 }
 
 TEST(SurfacePipeline, PlanAndTermsAreChecked) {

@@ -47,7 +47,8 @@ TEST(ThicknessPipeline, SphereApproachesTheReferenceAsItsVoxelsShrink) {
   for (int voxels : {48, 96, 144}) {
     s.voxels = voxels;
     Image ref = render(ReferencePipeline(test::shared_gpu()), s);
-    errors.push_back(relative_rmse(thickness, ref, coverage_mask(s, voxelize(s, {.resolution = voxels}))));
+    errors.push_back(
+        relative_rmse(thickness, ref, coverage_mask(s, voxelize(s, {.resolution = voxels}))));
   }
   EXPECT_LT(errors[1], errors[0]);
   EXPECT_LT(errors[2], errors[1]);
