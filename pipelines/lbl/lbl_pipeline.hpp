@@ -14,17 +14,7 @@
 // The volume, the deposit and the lattice's state are kept between frames: a camera-only change
 // runs only the view pass; a light change re-marches and warm-starts the lattice.
 //
-// Settings: rays (2) light rays per voxel width; step (0.5) Eikonal step in voxels; smooth (1)
-// Gaussian on n, in voxels; cutoff (1e-4) rays stop under this fraction of their power;
-// directions (6) 6 (the paper's) or 18 (Geist et al.'s lattice, global form only);
-// blocked (0) the paper's blocks with interface buffers (1) or the global lattice (0, faster
-// on the CPU device, see docs/BENCHMARKS.md); block (4) b; inner (1) steps per block launch;
-// tolerance (1e-3) relative change that ends the diffusion; max_steps (20000); check_every (16);
-// warm (1) warm start; skip_multiple (1e-3) skip the lattice when a scattered photon's chance to
-// scatter again, 1 - exp(-max sigma_s x longest side), is under this; measure (0) after a
-// diffusion, time 16 more lattice steps and 16 STREAM-like copies of the lattice state (stage
-// "bandwidth": the achieved GB/s of each); interleave (0) k > 0 marches in rounds of k fixed
-// steps, each followed by k x step lattice steps (the paper's Table I), 0 marches then diffuses.
+// Settings: the table in pipelines/lbl/lbl_info.cpp (`scatterd pipelines`, docs/pipelines/lbl.md).
 #pragma once
 
 #include <memory>

@@ -6,13 +6,9 @@
 // march per light (kernels/psf/march.cl). A camera-only change reuses every pyramid; a moved
 // light rebuilds its own only. Refraction and Fresnel are neglected (straight rays).
 //
-// Settings: step (sub-step in voxels, 1), spacing (lookups per projected blur width, 1),
-// shift (the width formula's shift in scattering events, the paper's 8), atten (0 Algorithm 2's
-// weight exp(-(c/b) l) over the whole path, 1 extinction over the view segment only, 2 (default)
-// absorption only over the view segment, as equation 11's action: see kernels/psf/march.cl and
-// docs/BENCHMARKS.md for the measurements behind the default), thin (optical thickness below which
-// the multiple term is skipped, 0.05), rebuild (1: drop the kept light volumes first, as if every
-// light had moved; for benchmarks).
+// Settings: the table in pipelines/psf/psf_info.cpp (`scatterd pipelines`, docs/pipelines/psf.md).
+// atten 2 (absorption only over the view segment) is the default for the measurements in
+// docs/BENCHMARKS.md (kernels/psf/march.cl).
 #pragma once
 
 #include <map>

@@ -7,8 +7,8 @@
 //   single term, mc=1       Monte Carlo, NEE at the first vertex only
 //   multiple, all           Monte Carlo path tracer (kernels/reference/path.cl)
 //
-// Settings: spp (64) samples per pixel; step (0.25) marcher sub-step in voxels; seed (1);
-// max_depth (1024) scattering events per path; mc (0) use Monte Carlo for the single term.
+// Settings: the table in pipelines/reference/reference_info.cpp (`scatterd pipelines`,
+// docs/pipelines/reference.md).
 #pragma once
 
 #include "pipelines/cost.hpp"

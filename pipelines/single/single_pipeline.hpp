@@ -1,7 +1,7 @@
 // `single`: single scattering inside inhomogeneous materials from baked samples
 // (papers/single-scattering-inhomogeneous.md). The bake (single_bake.hpp) places Gaussian samples
 // carrying spherical harmonics of their direction-dependent optical depth; it is content-addressed
-// by the voxelized medium and the bake settings, and kept in the BakeCache. A frame:
+// by the asset (pipelines/asset_key) and the bake settings, and kept in the BakeCache. A frame:
 //   depth_peel  the mesh's first four surfaces from the eye (distance textures)
 //   shade       per sample (compute shader): weight * sigma_s * psi(to eye) * sum over lights of
 //               E * psi(to light) * phase, so the fragment work does not grow with the lights
@@ -10,18 +10,13 @@
 //               surface by depth peeling; the paper: from the first surface on)
 //               (erf), added into a float target
 //
-// Settings: the bake's (directions 128, samples 25000, sh_order 5, sh_depth 0, radius 0.5,
-// candidates 5, density_guide 0, weight_fit 20, split 2, sigma_fit 8, adapt 0.5, seed 1), clip_back
-// (1): clip to the medium's first two intervals along the ray by depth peeling (0: the paper's
-// front-only clipping), and exact_tr (1): sum each sample's optical depth to the eye (every frame)
-// and to every light (when the light appears or moves) through the voxels
+// Settings: the table in pipelines/single/single_info.cpp (`scatterd pipelines`,
+// docs/pipelines/single.md). exact_tr (the default) sums each sample's optical depth to the eye
+// (every frame) and to every light (when it appears or moves) through the voxels
 // (kernels/single/shade.cl); 0 reads them from the samples' SH, the paper's method (measured: the
-// SH's 25 coefficients are most of the error on faces and shadows, docs/BENCHMARKS.md). With
-// exact_tr, tr_gradient (1) models the transmittance over each Gaussian as exponential in the
-// position (the gradient of the optical depth by slope-limited differences), which moves and scales
-// the Gaussian, and tr_gradient_max (2) bounds |gradient| x sigma. The term is the single-scattered
-// radiance; the surface, refraction and Fresnel at the boundary are not included (ior is neglected,
-// and the plan says so).
+// SH's 25 coefficients are most of the error on faces and shadows, docs/BENCHMARKS.md). The term is
+// the single-scattered radiance; the surface, refraction and Fresnel at the boundary are not
+// included (ior is neglected, and the plan says so).
 #pragma once
 
 #include <map>

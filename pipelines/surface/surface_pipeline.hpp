@@ -1,8 +1,8 @@
 // `surface`: the mesh alone, rasterised with energy-normalised Blinn-Phong under the scene's
 // lights through EGL. The smallest end-to-end path; the raster pieces it draws with
 // (pipelines/common/raster) serve the other pipelines too.
-// Settings: shadows (0; 1: a distance map per light, as the thickness path's, and a facet is lit
-// only where no surface lies nearer to the light), shadow_size (1024).
+// Settings: the table in pipelines/surface/surface_info.cpp (`scatterd pipelines`,
+// docs/pipelines/surface.md).
 #pragma once
 
 #include "gpu/gl_objects.hpp"

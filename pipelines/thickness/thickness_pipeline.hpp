@@ -4,9 +4,10 @@
 // in-scattering integral along the view segment is summed over `steps` pieces with the view
 // transmittance integrated exactly in each.
 //
-// Settings: steps (32) pieces per view segment; shadow_size (1024) shadow-map side in texels.
-// Approximations (as the blog): only the first segment inside the object is integrated, the light
-// enters at the surface nearest to it, and refraction and Fresnel at the boundary are neglected.
+// Settings: the table in pipelines/thickness/thickness_info.cpp (`scatterd pipelines`,
+// docs/pipelines/thickness.md). Approximations (as the blog): only the first segment inside the
+// object is integrated, the light enters at the surface nearest to it, and refraction and Fresnel
+// at the boundary are neglected.
 #pragma once
 
 #include "gpu/gl_objects.hpp"
