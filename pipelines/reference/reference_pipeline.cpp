@@ -41,8 +41,12 @@ void finish_estimate(const std::vector<float>& sum, const std::vector<float>& su
 
 Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
-  ReferenceSettings s = ReferenceSettings::read(request.settings);
-  Plan p{name(), request.terms, {}};
+  return describe(scene, request.terms, ReferenceSettings::read(request.settings));
+}
+
+Plan ReferencePipeline::describe(const Scene& scene, Terms terms,
+                                 const ReferenceSettings& s) const {
+  Plan p{name(), terms, {}};
   p.stages.push_back({"voxelize", true, std::to_string(scene.voxels) + " voxels on the long side"});
   if (scene.medium.ior != 1.0)
     p.stages.push_back({"boundary", true,
@@ -52,7 +56,7 @@ Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
   else
     p.stages.push_back({"boundary", false, "index matched (ior 1): no reflection or refraction"});
   p.stages.push_back({"upload", true, "medium, per-brick majorants (8^3 voxels), lights, camera"});
-  if (marches(s, request.terms)) {
+  if (marches(s, terms)) {
     p.stages.push_back(
         {"march", true,
          "deterministic single scattering, step " + std::to_string(s.step) + " voxels"});
@@ -62,7 +66,7 @@ Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
     p.stages.push_back({"march", false, "Monte Carlo estimates this term"});
     p.stages.push_back({"trace", true,
                         std::to_string(s.spp) + " samples per pixel, " +
-                            (request.terms == Terms::Single ? "first vertex only" : "all orders")});
+                            (terms == Terms::Single ? "first vertex only" : "all orders")});
   }
   p.stages.push_back({"readback", true, "mean and standard error"});
   return p;
@@ -70,8 +74,9 @@ Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
 
 RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& request) {
   RenderResult result;
-  result.plan = plan(scene, request);
-  ReferenceSettings s = ReferenceSettings::read(request.settings);
+  require_terms(*this, request.terms);
+  const ReferenceSettings s = ReferenceSettings::read(request.settings);  // once a frame
+  result.plan = describe(scene, request.terms, s);
   StageClock clock(result.timings);
   VoxelGrid grid = voxelize(scene, {.resolution = scene.voxels});
   clock.stop("voxelize");

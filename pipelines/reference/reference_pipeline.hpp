@@ -36,6 +36,8 @@ class ReferencePipeline : public Pipeline {
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 
  private:
+  // The stages for this scene, terms and settings.
+  Plan describe(const Scene& scene, Terms terms, const ReferenceSettings& s) const;
   gpu::Gpu& gpu_;
 };
 

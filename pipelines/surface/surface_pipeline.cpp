@@ -9,8 +9,11 @@ namespace scatter {
 
 Plan SurfacePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
-  SurfaceSettings s = SurfaceSettings::read(request.settings);
-  Plan p{name(), request.terms, {}};
+  return describe(scene, request.terms, SurfaceSettings::read(request.settings));
+}
+
+Plan SurfacePipeline::describe(const Scene& scene, Terms terms, const SurfaceSettings& s) const {
+  Plan p{name(), terms, {}};
   p.stages.push_back({"upload", true, std::to_string(scene.mesh->triangle_count()) + " triangles"});
   p.stages.push_back({"shadow_maps", s.shadows && !scene.lights.empty(),
                       s.shadows
@@ -25,11 +28,12 @@ Plan SurfacePipeline::plan(const Scene& scene, const RenderRequest& request) {
 
 RenderResult SurfacePipeline::render(const Scene& scene, const RenderRequest& request) {
   RenderResult result;
-  result.plan = plan(scene, request);
+  require_terms(*this, request.terms);
+  const SurfaceSettings s = SurfaceSettings::read(request.settings);  // once a frame
+  result.plan = describe(scene, request.terms, s);
   gpu_.gl().make_current();
   if (!program_)
     program_ = gpu::build_program("shaders/surface/mesh.vert", "shaders/surface/blinn_phong.frag");
-  SurfaceSettings s = SurfaceSettings::read(request.settings);
   StageClock clock(result.timings);
   MeshBuffers mesh(*scene.mesh);
   RenderTarget target(scene.width, scene.height);

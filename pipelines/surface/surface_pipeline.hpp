@@ -28,6 +28,8 @@ class SurfacePipeline : public Pipeline {
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 
  private:
+  // The stages for this scene, terms and settings.
+  Plan describe(const Scene& scene, Terms terms, const SurfaceSettings& s) const;
   gpu::Gpu& gpu_;
   gpu::GlObject program_, distance_program_;
 };

@@ -11,12 +11,16 @@ namespace scatter {
 
 Plan ThicknessPipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
-  ThicknessSettings s = ThicknessSettings::read(request.settings);
+  return describe(scene, request.terms, ThicknessSettings::read(request.settings));
+}
+
+Plan ThicknessPipeline::describe(const Scene& scene, Terms terms,
+                                 const ThicknessSettings& s) const {
   if (!scene.medium.density->homogeneous())
     throw ValidationError("scene.medium.density",
                           "the thickness pipeline needs a homogeneous "
                           "medium (constant density); use reference");
-  Plan p{name(), request.terms, {}};
+  Plan p{name(), terms, {}};
   p.stages.push_back({"bake", false, "homogeneous medium: no optical-depth bake is needed"});
   p.stages.push_back({"shadow_maps", !scene.lights.empty(),
                       std::to_string(scene.lights.size()) + " lights, " +
@@ -33,8 +37,9 @@ Plan ThicknessPipeline::plan(const Scene& scene, const RenderRequest& request) {
 
 RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& request) {
   RenderResult result;
-  result.plan = plan(scene, request);
-  ThicknessSettings s = ThicknessSettings::read(request.settings);
+  require_terms(*this, request.terms);
+  const ThicknessSettings s = ThicknessSettings::read(request.settings);  // once a frame
+  result.plan = describe(scene, request.terms, s);
   gpu_.gl().make_current();
   if (!distance_program_) {
     distance_program_ = build_distance_program();

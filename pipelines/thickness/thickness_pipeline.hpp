@@ -33,6 +33,8 @@ class ThicknessPipeline : public Pipeline {
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 
  private:
+  // The stages for this scene, terms and settings.
+  Plan describe(const Scene& scene, Terms terms, const ThicknessSettings& s) const;
   gpu::Gpu& gpu_;
   gpu::GlObject distance_program_, integrate_program_, empty_vao_;
 };
