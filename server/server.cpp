@@ -99,11 +99,24 @@ void Server::stop() {
   boost::asio::post(io_, [this] {
     boost::system::error_code ec;
     acceptor_.close(ec);
-    // A moment for the answers to what was dropped or cancelled ("503: the server is stopping")
-    // to reach their clients, then the I/O ends.
+    linger(std::chrono::steady_clock::now() + kStopGrace);
+  });
+}
+
+void Server::linger(std::chrono::steady_clock::time_point deadline) {
+  // The I/O ends once the queues' threads are done (the running job has stopped at its check and
+  // answered "503: the server is stopping") or the grace is over, and a moment after, for those
+  // answers to reach their clients. Ending it at a fixed delay lost the answer of a job that
+  // stopped later (a loaded machine), leaving its client waiting on an open socket.
+  bool stopped = queue_.wait_stopped(std::chrono::milliseconds(0)) &&
+                 bake_queue_.wait_stopped(std::chrono::milliseconds(0));
+  if (stopped || std::chrono::steady_clock::now() >= deadline) {
     stop_timer_.expires_after(kStopLinger);
     stop_timer_.async_wait([this](boost::system::error_code) { io_.stop(); });
-  });
+    return;
+  }
+  stop_timer_.expires_after(std::chrono::milliseconds(10));
+  stop_timer_.async_wait([this, deadline](boost::system::error_code) { linger(deadline); });
 }
 
 }  // namespace scatter::server

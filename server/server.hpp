@@ -35,8 +35,10 @@ class Server {
   unsigned short port() const { return port_; }
   // Serves until stop() (or SIGINT/SIGTERM when `handle_signals`).
   void run(bool handle_signals);
-  // Stops accepting, drops queued renders and bakes, cancels the running ones, ends run().
+  // Stops accepting, drops queued renders and bakes, cancels the running ones, and ends run()
+  // once they have stopped and answered (or after kStopGrace, whichever comes first).
   void stop();
+  static constexpr std::chrono::milliseconds kStopGrace{1000};
   // After run() returned: waits up to `timeout` for the render and bake threads to finish their
   // cancelled jobs; false if one is still busy (a pipeline step that cannot be interrupted).
   bool wait_stopped(std::chrono::milliseconds timeout);
@@ -55,6 +57,7 @@ class Server {
   boost::asio::ip::tcp::acceptor acceptor_;
   boost::asio::steady_timer stop_timer_;
   static constexpr std::chrono::milliseconds kStopLinger{250};
+  void linger(std::chrono::steady_clock::time_point deadline);
   unsigned short port_ = 0;
 };
 

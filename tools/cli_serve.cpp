@@ -31,9 +31,6 @@ bool is_loopback(const std::string& bind) {
   return !ec && a.is_loopback();
 }
 
-// How long SIGTERM waits for the render and bake threads to stop their cancelled jobs.
-constexpr auto kStopGrace = std::chrono::milliseconds(1000);
-
 int run_serve(ServeOptions o) {
   if (o.token_given && o.server.api.token.empty())
     throw std::runtime_error(
@@ -51,10 +48,11 @@ int run_serve(ServeOptions o) {
   std::cout << "scatterd: serving on http://" << o.server.bind << ":" << server.port() << "/"
             << std::endl;
   server.run(true);
-  // Queued work was dropped and running work cancelled; a pipeline step that cannot be
-  // interrupted does not hold the exit past the grace period.
-  if (!server.wait_stopped(kStopGrace)) {
-    spdlog::warn("event=stop_timeout grace_ms={} action=exit_without_waiting", kStopGrace.count());
+  // Queued work was dropped and running work cancelled; run() waited up to Server::kStopGrace
+  // for it, so a pipeline step that cannot be interrupted does not hold the exit past that.
+  if (!server.wait_stopped(std::chrono::milliseconds(0))) {
+    spdlog::warn("event=stop_timeout grace_ms={} action=exit_without_waiting",
+                 server::Server::kStopGrace.count());
     std::cout << "scatterd: stopped (a render was still running)" << std::endl;
     std::_Exit(0);
   }
