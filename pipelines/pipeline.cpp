@@ -37,8 +37,19 @@ void to_json(nlohmann::json& j, const StagePlan& s) {
   j = {{"stage", s.name}, {"run", s.run}, {"reason", s.reason}};
 }
 
+void to_json(nlohmann::json& j, const PlanOption& o) {
+  j = {{"pipeline", o.pipeline},
+       {"settings", o.settings},
+       {"expected_error", o.expected_error},
+       {"expected_seconds", o.expected_seconds},
+       {"note", o.note}};
+}
+
 void to_json(nlohmann::json& j, const Plan& p) {
   j = {{"pipeline", p.pipeline}, {"terms", to_string(p.terms)}, {"stages", p.stages}};
+  if (p.expected_error) j["expected_error"] = *p.expected_error;
+  if (p.expected_seconds) j["expected_seconds"] = *p.expected_seconds;
+  if (!p.alternatives.empty()) j["alternatives"] = p.alternatives;
 }
 
 double SettingsReader::number(const std::string& key, double fallback, double lo, double hi) {

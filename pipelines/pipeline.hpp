@@ -34,10 +34,24 @@ struct StagePlan {
   std::string reason;  // why it runs or why it is skipped
 };
 
+// One way of rendering a request that a budget planner (auto with quality.max_error) weighed:
+// a pipeline (or "single-from+multiple-from" for a composite) and its settings, with the error
+// against the reference of the requested terms (relative RMSE) and the seconds it expects.
+struct PlanOption {
+  std::string pipeline;
+  Settings settings;
+  double expected_error = 0;
+  double expected_seconds = 0;
+  std::string note;  // why it was or was not chosen
+};
+
 struct Plan {
   std::string pipeline;
   Terms terms = Terms::All;
   std::vector<StagePlan> stages;
+  // Set by a planner: what the chosen way expects, and the others it weighed.
+  std::optional<double> expected_error, expected_seconds;
+  std::vector<PlanOption> alternatives;
 };
 
 // The stage called `name`; throws std::logic_error when the plan has none (a pipeline's bug).
@@ -50,6 +64,9 @@ using Settings = std::map<std::string, double>;
 struct RenderRequest {
   Terms terms = Terms::All;
   Settings settings;
+  // The error the caller accepts (relative RMSE against the reference of `terms`, e.g. 0.05):
+  // auto plans by it, the reference takes as many samples as it needs; other pipelines reject it.
+  std::optional<double> max_error;
   // Called now and then with the fraction done, for long renders.
   std::function<void(double)> progress;
 };
@@ -57,6 +74,9 @@ struct RenderRequest {
 struct RenderResult {
   Image image;
   std::optional<Image> std_error;  // per-pixel standard error, for Monte Carlo estimates
+  // This image's estimated error against the reference of its terms (relative RMSE): from
+  // std_error for Monte Carlo estimates, from the calibration table for the approximations.
+  std::optional<double> error_estimate;
   Plan plan;
   std::vector<StageTime> timings;
 };
@@ -79,6 +99,7 @@ class SettingsReader {
 class BakeCache;
 
 void to_json(nlohmann::json& j, const StagePlan& s);
+void to_json(nlohmann::json& j, const PlanOption& o);
 void to_json(nlohmann::json& j, const Plan& p);
 
 struct PipelineInfo;  // pipelines/registry.hpp

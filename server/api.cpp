@@ -324,6 +324,11 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
   spec.terms = r.string("terms", "");
   spec.format = r.choice("format", {"png", "jpg", "exr", "json"}, "png");
   spec.exposure = r.number("exposure", 1.0, {1e-6, 1e6});
+  if (auto q = r.optional_object("quality")) {
+    if (q->has("max_error")) spec.max_error = q->number("max_error", std::nullopt, {1e-4, 1});
+    spec.refine_floor = q->number("refine_floor", spec.refine_floor, {1e-4, 1});
+    q->finish();
+  }
   if (auto s = r.optional_object("settings")) {
     for (const auto& [key, value] : request["settings"].items())
       spec.settings[key] = s->number(key, std::nullopt, {-1e9, 1e9});
@@ -368,6 +373,11 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
     }
   }
   check_pipeline(spec.pipeline, spec.terms, spec.settings);
+  if (spec.max_error && spec.pipeline != "auto" && spec.pipeline != "reference")
+    throw ValidationError("quality.max_error",
+                          "is planned for by pipeline auto (and met by the reference's sample "
+                          "count); pipeline " +
+                              spec.pipeline + " renders at its own settings");
   return spec;
 }
 
@@ -389,6 +399,7 @@ void Api::render(const HttpRequest& http, const Respond& respond) {
   frame.pipeline = spec.pipeline;
   frame.terms = spec.terms;
   frame.settings = spec.settings;
+  frame.max_error = spec.max_error;
   frame.scene_load_ms = spec.scene_load_ms;
   frame.max_seconds = options_.max_render_s;
   auto cancel = http.cancel ? http.cancel : std::make_shared<CancelToken>();

@@ -114,9 +114,13 @@ class Api {
     Settings settings;
     double exposure = 1.0;
     double scene_load_ms = 0;  // > 0 when this request loaded the scene (not a library hit)
+    // "quality": {"max_error": E, "refine_floor": F}: the error the client accepts (relative
+    // RMSE against the reference), and where a still live view stops refining.
+    std::optional<double> max_error;
+    double refine_floor = 0.01;
   };
   // Reads the fields of `r` (an object over `json`): scene or scene_name, pipeline, terms, format,
-  // settings, exposure. Leaves other fields for the caller; throws ValidationError. An inline
+  // settings, exposure, quality. Leaves other fields for the caller; throws ValidationError. An inline
   // scene's "asset" fields become the uploaded files' paths; shipped scenes come from `library`.
   static RenderSpec read_render_spec(JsonObject& r, const nlohmann::json& json,
                                      const ApiOptions& options, SceneLibrary& library);

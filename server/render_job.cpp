@@ -26,6 +26,7 @@ RenderResult render_frame(RenderQueue::Context& c, Metrics& metrics, const Frame
   Pipeline& p = c.pipeline(spec.pipeline);
   RenderRequest req;
   req.settings = spec.settings;
+  req.max_error = spec.max_error;
   auto ok = p.supported_terms();
   req.terms = !spec.terms.empty()                                       ? parse_terms(spec.terms)
               : std::find(ok.begin(), ok.end(), Terms::All) != ok.end() ? Terms::All

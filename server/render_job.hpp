@@ -22,6 +22,7 @@ struct FrameSpec {
   int width = 0, height = 0;             // 0: the scene's
   std::string pipeline = "auto", terms;  // terms empty: all, if the pipeline has it, else its first
   Settings settings;
+  std::optional<double> max_error;  // the RenderRequest's
   double scene_load_ms = 0;  // reported as a "scene_load" stage when > 0
   double max_seconds = 0;    // > 0: cancelled once it has run this long (--max-render-s)
 };
