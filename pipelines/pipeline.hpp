@@ -34,6 +34,10 @@ struct StagePlan {
   std::string reason;  // why it runs or why it is skipped
 };
 
+// Numeric knobs a pipeline understands ("spp", "step", ...); each pipeline documents its own and
+// rejects the ones it does not know, so a typo is an error rather than a silent default.
+using Settings = std::map<std::string, double>;
+
 // One way of rendering a request that a budget planner (auto with quality.max_error) weighed:
 // a pipeline (or "single-from+multiple-from" for a composite) and its settings, with the error
 // against the reference of the requested terms (relative RMSE) and the seconds it expects.
@@ -56,10 +60,6 @@ struct Plan {
 
 // The stage called `name`; throws std::logic_error when the plan has none (a pipeline's bug).
 StagePlan& plan_stage(Plan& plan, const std::string& name);
-
-// Numeric knobs a pipeline understands ("spp", "step", ...); each pipeline documents its own and
-// rejects the ones it does not know, so a typo is an error rather than a silent default.
-using Settings = std::map<std::string, double>;
 
 struct RenderRequest {
   Terms terms = Terms::All;
