@@ -64,11 +64,11 @@ StagePlan& plan_stage(Plan& plan, const std::string& name);
 struct RenderRequest {
   Terms terms = Terms::All;
   Settings settings;
+  // Called now and then with the fraction done, for long renders.
+  std::function<void(double)> progress;
   // The error the caller accepts (relative RMSE against the reference of `terms`, e.g. 0.05):
   // auto plans by it, the reference takes as many samples as it needs; other pipelines reject it.
   std::optional<double> max_error;
-  // Called now and then with the fraction done, for long renders.
-  std::function<void(double)> progress;
 };
 
 struct RenderResult {
