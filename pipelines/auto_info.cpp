@@ -1,6 +1,6 @@
-// `auto` in the registry. It accepts the settings of the pipelines it may choose (thickness and
-// reference, whose keys do not overlap), each checked by the pipeline that declares it whatever
-// the scene; the chosen pipeline gets its own and the plan names the ones it did not use.
+// `auto` in the registry. It accepts the settings of thickness and reference (whose keys do not
+// overlap), each checked by the pipeline that declares it whatever the scene; they override the
+// chosen way's quality settings for the parts that declare them.
 #include "pipelines/auto_pipeline.hpp"
 #include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
@@ -12,7 +12,9 @@ const PipelineInfo& reference_info();
 
 namespace {
 
+// Whose settings auto takes, and the pipelines its ways use (the calibration table's).
 const std::vector<std::string> kDelegates = {"thickness", "reference"};
+const std::vector<std::string> kChoices = {"thickness", "single", "lbl", "psf", "reference"};
 
 // By the delegates' own info (the registry is not built yet while auto's info is).
 std::vector<SettingInfo> delegate_settings() {
@@ -52,8 +54,8 @@ const PipelineInfo& auto_info() {
   static const PipelineInfo info{
       .name = "auto",
       .summary =
-          "chooses the cheapest pipeline that renders the scene and the terms, and says why in the "
-          "plan",
+          "the fastest way expected to meet an error budget (quality.max_error, default 10 %): one "
+          "pipeline, single plus multiple from two, or the reference; the plan says why",
       .method = "docs/pipelines/auto.md",
       .terms = {Terms::Single, Terms::Multiple, Terms::All},
       .default_terms = Terms::Single,
@@ -61,7 +63,7 @@ const PipelineInfo& auto_info() {
       .validate = &validate,
       .bake_stages = {},
       .qualities = {{"normal", {}}},
-      .delegates = kDelegates,
+      .delegates = kChoices,
       .make = [](gpu::Gpu& gpu, BakeCache* cache) -> std::unique_ptr<Pipeline> {
         return std::make_unique<AutoPipeline>(gpu, cache);
       },

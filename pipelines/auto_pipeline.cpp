@@ -1,31 +1,20 @@
 #include "pipelines/auto_pipeline.hpp"
 
+#include <cmath>
+
+#include "bake/cache.hpp"
+#include "pipelines/metrics.hpp"
 #include "pipelines/registry.hpp"
 
 namespace scatter {
 
 const PipelineInfo& auto_info();
 
-std::pair<std::string, std::string> AutoPipeline::choose(const Scene& scene, Terms terms) {
-  if (!scene.medium.density->homogeneous())
-    return {"reference",
-            "inhomogeneous medium: the reference is exact; single (baked, 3-7 % off on the "
-            "benchmark scenes), psf and lbl render it faster when asked for"};
-  if (scene.medium.ior != 1.0)
-    return {"reference",
-            "a dielectric boundary (ior != 1): thickness neglects Fresnel and refraction"};
-  if (terms != Terms::Single)
-    return {"reference", "the " + to_string(terms) +
-                             " term: the reference; lbl and psf render it faster "
-                             "but further from it (docs/BENCHMARKS.md)"};
-  Aabb b = scene.mesh->bounds();
-  for (const Light& l : scene.lights)
-    if (l.type != Light::Type::Directional &&
-        length(l.position - b.center()) <= length(b.size()) / 2 * 1.05)
-      return {"reference", "a light inside the object's bounding sphere: no shadow map can see it"};
-  return {"thickness",
-          "homogeneous medium: the thickness path serves it; the optical-depth bake is skipped "
-          "because a constant density needs none"};
+BudgetChoice AutoPipeline::choose(const Scene& scene, const RenderRequest& request,
+                                  const IsBaked& baked) {
+  Budget budget{request.max_error.value_or(kDefaultMaxError), !request.max_error};
+  return plan_budget(scene, request.terms, budget, request.settings, CalibrationTable::shipped(),
+                     baked);
 }
 
 Pipeline& AutoPipeline::delegate(const std::string& name) {
@@ -34,46 +23,103 @@ Pipeline& AutoPipeline::delegate(const std::string& name) {
   return *p;
 }
 
-namespace {
-
-// The request as the chosen pipeline gets it: its own settings only.
-RenderRequest delegated(const RenderRequest& request, const std::string& chosen) {
-  RenderRequest r = request;
-  r.settings = AutoPipeline::settings_for(chosen, request.settings);
-  return r;
+IsBaked AutoPipeline::baked_in_cache(const Scene& scene) {
+  if (!cache_) return nullptr;
+  return [this, &scene](const std::string& pipeline, const Settings& settings) {
+    const PipelineInfo& info = pipeline_info(pipeline);
+    return info.bake_key && cache_->get(info.bake_key(scene, settings)).has_value();
+  };
 }
 
-}  // namespace
+RenderRequest AutoPipeline::part_request(const BudgetChoice& c, size_t part,
+                                         const RenderRequest& r) {
+  RenderRequest p{c.way.parts[part].terms, c.settings[part], r.progress};
+  if (c.sampled && part + 1 == c.way.parts.size())
+    p.max_error = r.max_error.value_or(kDefaultMaxError);
+  return p;
+}
+
+Plan AutoPipeline::describe(const Scene& scene, const RenderRequest& request,
+                            const BudgetChoice& c) {
+  Plan p{name() + " -> " + c.way.id(), request.terms, {{"choose", true, c.reason}}};
+  if (c.way.parts.size() == 2)
+    p.stages.push_back({"composite", true,
+                        "the single term from " + c.way.parts[0].pipeline +
+                            " plus the multiple term from " + c.way.parts[1].pipeline});
+  for (size_t i = 0; i < c.way.parts.size(); ++i) {
+    Plan inner = delegate(c.way.parts[i].pipeline).plan(scene, part_request(c, i, request));
+    for (StagePlan s : inner.stages) {
+      if (c.way.parts.size() == 2) s.name = c.way.parts[i].pipeline + "." + s.name;
+      p.stages.push_back(std::move(s));
+    }
+  }
+  p.expected_error = c.expected_error;
+  p.expected_seconds = c.expected_seconds;
+  p.alternatives = c.alternatives;
+  return p;
+}
 
 Plan AutoPipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   info().validate(request.settings);
-  auto [chosen, why] = choose(scene, request.terms);
-  RenderRequest inner_request = delegated(request, chosen);
-  Plan inner = delegate(chosen).plan(scene, inner_request);
-  std::string unused;
-  for (const auto& [key, value] : request.settings)
-    if (!inner_request.settings.count(key)) unused += (unused.empty() ? "" : ", ") + key;
-  if (!unused.empty()) why += " (settings not used by " + chosen + ": " + unused + ")";
-  Plan p{name() + " -> " + chosen, request.terms, {{"choose", true, chosen + ": " + why}}};
-  p.stages.insert(p.stages.end(), inner.stages.begin(), inner.stages.end());
-  return p;
+  return describe(scene, request, choose(scene, request, baked_in_cache(scene)));
 }
 
 RenderResult AutoPipeline::render(const Scene& scene, const RenderRequest& request) {
-  Plan p = plan(scene, request);
-  const std::string chosen = choose(scene, request.terms).first;
-  RenderResult r = delegate(chosen).render(scene, delegated(request, chosen));
-  r.plan = std::move(p);
-  return r;
+  require_terms(*this, request.terms);
+  info().validate(request.settings);
+  BudgetChoice c = choose(scene, request, baked_in_cache(scene));
+  Plan plan = describe(scene, request, c);
+  RenderResult out;
+  for (size_t i = 0; i < c.way.parts.size(); ++i) {
+    RenderResult r = delegate(c.way.parts[i].pipeline).render(scene, part_request(c, i, request));
+    for (StageTime t : r.timings) {
+      if (c.way.parts.size() == 2) t.stage = c.way.parts[i].pipeline + "." + t.stage;
+      out.timings.push_back(std::move(t));
+    }
+    if (i == 0) {
+      out.image = std::move(r.image);
+      out.std_error = std::move(r.std_error);
+      out.error_estimate = r.error_estimate;
+      continue;
+    }
+    for (size_t k = 0; k < out.image.rgb.size(); ++k) out.image.rgb[k] += r.image.rgb[k];
+    // Independent estimates: standard errors add in quadrature (a deterministic part has none).
+    if (out.std_error && r.std_error) {
+      for (size_t k = 0; k < out.std_error->rgb.size(); ++k)
+        out.std_error->rgb[k] = std::hypot(out.std_error->rgb[k], r.std_error->rgb[k]);
+    } else if (r.std_error) {
+      out.std_error = std::move(r.std_error);
+    }
+  }
+  if (out.std_error) {  // the path tracer's: its measured standard error
+    out.error_estimate = relative_norm(*out.std_error, out.image);
+  } else {
+    out.error_estimate = c.expected_error;  // calibrated
+  }
+  out.plan = std::move(plan);
+  return out;
 }
 
 CostEstimate AutoPipeline::estimate(const Scene& scene, const RenderRequest& request, bool bake) {
   auto_info().validate(request.settings);
-  const std::string chosen = choose(scene, request.terms).first;
-  // AutoPipeline::render delegates to its choice with its settings; auto bakes nothing itself.
-  CostEstimate e = pipeline_info(chosen).estimate(scene, delegated(request, chosen), bake);
-  e.summary = "auto -> " + e.summary;
+  BudgetChoice c = choose(scene, request);
+  CostEstimate e;
+  for (size_t i = 0; i < c.way.parts.size(); ++i) {
+    RenderRequest r = part_request(c, i, request);
+    CostEstimate p = pipeline_info(c.way.parts[i].pipeline).estimate(scene, r, bake);
+    if (p.bytes() > e.bytes()) {
+      e.host_bytes = p.host_bytes;
+      e.device_bytes = p.device_bytes;
+      e.memory_field = p.memory_field;
+    }
+    if (p.seconds > e.seconds) e.time_field = p.time_field;
+    e.seconds += p.seconds;
+    e.summary += (e.summary.empty() ? "" : "; ") + p.summary;
+  }
+  // The budget drives the reference's samples.
+  if (c.sampled && e.time_field == "settings.spp") e.time_field = "quality.max_error";
+  e.summary = "auto -> " + c.way.id() + ": " + e.summary;
   return e;
 }
 

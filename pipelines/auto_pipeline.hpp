@@ -1,16 +1,19 @@
-// `auto`: picks the cheapest pipeline that can render the scene and the requested terms, and says
-// why in the plan's first stage; the chosen pipeline's stages follow.
-//
-//   homogeneous medium, single term  -> thickness (no optical-depth bake is needed)
-//   anything else                    -> reference
+// `auto`: renders the requested terms within an error budget (the request's quality.max_error,
+// else kDefaultMaxError) the fastest way the calibration table expects to meet it, and says in
+// the plan what it chose, the error and time it expects, the alternatives it weighed and why
+// (pipelines/budget/planner.hpp). A way is one pipeline at one quality, the single term from one
+// pipeline plus the multiple term from another (composited: the images are summed), or the
+// reference, which meets any budget.
 //
 // Settings: those of thickness and reference (pipelines/auto_info.cpp), each checked by its own
-// pipeline whatever the choice; the chosen one gets its own.
+// pipeline whatever the choice; they override the chosen quality's for the parts that declare
+// them.
 #pragma once
 
 #include <map>
 #include <memory>
 
+#include "pipelines/budget/planner.hpp"
 #include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 
@@ -23,15 +26,21 @@ class AutoPipeline : public Pipeline {
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 
-  // The pipeline auto would use, and why.
-  static std::pair<std::string, std::string> choose(const Scene& scene, Terms terms);
+  // What auto would do with the request (no bake counted as made when `baked` is null).
+  static BudgetChoice choose(const Scene& scene, const RenderRequest& request,
+                             const IsBaked& baked = nullptr);
   // The part of `settings` that `delegate` declares.
   static Settings settings_for(const std::string& delegate, const Settings& settings);
-  // The cost of the chosen pipeline's render with its settings (pipelines/cost.hpp).
+  // The cost of the chosen way (pipelines/cost.hpp): its parts' seconds summed, their largest
+  // memory.
   static CostEstimate estimate(const Scene& scene, const RenderRequest& request, bool bake);
 
  private:
   Pipeline& delegate(const std::string& name);
+  // The request a part of the chosen way gets.
+  static RenderRequest part_request(const BudgetChoice& c, size_t part, const RenderRequest& r);
+  Plan describe(const Scene& scene, const RenderRequest& request, const BudgetChoice& c);
+  IsBaked baked_in_cache(const Scene& scene);  // by the cache's keys
 
   gpu::Gpu& gpu_;
   BakeCache* cache_;

@@ -1,6 +1,7 @@
 #include "pipelines/metrics.hpp"
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
@@ -70,6 +71,17 @@ double relative_norm(const Image& e, const Image& ref, const std::vector<uint8_t
         den += double(ref.rgb[3 * p + c]) * ref.rgb[3 * p + c];
       }
   if (den <= 0) throw std::invalid_argument("the reference image is black where the medium is");
+  return std::sqrt(num / den);
+}
+
+double relative_norm(const Image& e, const Image& ref) {
+  if (e.rgb.size() != ref.rgb.size()) throw std::invalid_argument("the images' sizes differ");
+  double num = 0, den = 0;
+  for (size_t i = 0; i < e.rgb.size(); ++i) {
+    num += double(e.rgb[i]) * e.rgb[i];
+    den += double(ref.rgb[i]) * ref.rgb[i];
+  }
+  if (den <= 0) return num > 0 ? std::numeric_limits<double>::infinity() : 0;  // nothing to see
   return std::sqrt(num / den);
 }
 

@@ -20,5 +20,8 @@ double relative_rmse(const Image& a, const Image& ref, const std::vector<uint8_t
 
 // ||e||_2 / ||ref||_2 over the masked pixels: e.g. a Monte Carlo reference's own noise level.
 double relative_norm(const Image& e, const Image& ref, const std::vector<uint8_t>& mask);
+// The same over every pixel: a render's own noise level (pixels the medium does not cover are 0
+// in both).
+double relative_norm(const Image& e, const Image& ref);
 
 }  // namespace scatter

@@ -11,6 +11,7 @@
 #include "bake/cache.hpp"
 #include "core/errors.hpp"
 #include "gpu/embedded_sources.hpp"
+#include "pipelines/budget/planner.hpp"
 #include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
 #include "scene/scene.hpp"
@@ -325,7 +326,7 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
   spec.format = r.choice("format", {"png", "jpg", "exr", "json"}, "png");
   spec.exposure = r.number("exposure", 1.0, {1e-6, 1e6});
   if (auto q = r.optional_object("quality")) {
-    if (q->has("max_error")) spec.max_error = q->number("max_error", std::nullopt, {1e-4, 1});
+    if (q->has("max_error")) spec.max_error = q->number("max_error", std::nullopt, {0, 1});
     spec.refine_floor = q->number("refine_floor", spec.refine_floor, {1e-4, 1});
     q->finish();
   }
@@ -373,11 +374,7 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
     }
   }
   check_pipeline(spec.pipeline, spec.terms, spec.settings);
-  if (spec.max_error && spec.pipeline != "auto" && spec.pipeline != "reference")
-    throw ValidationError("quality.max_error",
-                          "is planned for by pipeline auto (and met by the reference's sample "
-                          "count); pipeline " +
-                              spec.pipeline + " renders at its own settings");
+  if (spec.max_error) check_budget(spec.pipeline, *spec.max_error, "quality.max_error");
   return spec;
 }
 
@@ -393,7 +390,8 @@ void Api::render(const HttpRequest& http, const Respond& respond) {
   JsonObject r(request, "");
   RenderSpec spec = read_render_spec(r, request, options_, scenes_);
   r.finish();
-  check_cost(options_, spec.pipeline, *spec.scene, spec.terms, spec.settings, false);
+  check_cost(options_, spec.pipeline, *spec.scene, spec.terms, spec.settings, false,
+             spec.max_error);
   FrameSpec frame;
   frame.scene = spec.scene;
   frame.pipeline = spec.pipeline;

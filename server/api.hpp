@@ -120,8 +120,9 @@ class Api {
     double refine_floor = 0.01;
   };
   // Reads the fields of `r` (an object over `json`): scene or scene_name, pipeline, terms, format,
-  // settings, exposure, quality. Leaves other fields for the caller; throws ValidationError. An inline
-  // scene's "asset" fields become the uploaded files' paths; shipped scenes come from `library`.
+  // settings, exposure, quality. Leaves other fields for the caller; throws ValidationError. An
+  // inline scene's "asset" fields become the uploaded files' paths; shipped scenes come from
+  // `library`.
   static RenderSpec read_render_spec(JsonObject& r, const nlohmann::json& json,
                                      const ApiOptions& options, SceneLibrary& library);
   // Throws ValidationError for an unknown pipeline, terms it cannot render (unless `terms` is
@@ -131,7 +132,8 @@ class Api {
   // Throws RequestTooCostly (413) when rendering (or baking) `scene` as asked is estimated past
   // --max-request-mb or --max-render-s; the message names the field and the limit.
   static void check_cost(const ApiOptions& options, const std::string& pipeline, const Scene& scene,
-                         const std::string& terms, const Settings& settings, bool bake);
+                         const std::string& terms, const Settings& settings, bool bake,
+                         std::optional<double> max_error = std::nullopt);
 
  private:
   void route(const HttpRequest& request, std::string& route_name, const Respond& respond);

@@ -23,8 +23,8 @@ struct FrameSpec {
   std::string pipeline = "auto", terms;  // terms empty: all, if the pipeline has it, else its first
   Settings settings;
   std::optional<double> max_error;  // the RenderRequest's
-  double scene_load_ms = 0;  // reported as a "scene_load" stage when > 0
-  double max_seconds = 0;    // > 0: cancelled once it has run this long (--max-render-s)
+  double scene_load_ms = 0;         // reported as a "scene_load" stage when > 0
+  double max_seconds = 0;           // > 0: cancelled once it has run this long (--max-render-s)
 };
 
 // A request estimated to cost more than the server allows (413); names the field to change.

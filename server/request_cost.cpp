@@ -5,9 +5,11 @@
 namespace scatter::server {
 
 void Api::check_cost(const ApiOptions& options, const std::string& pipeline, const Scene& scene,
-                     const std::string& terms, const Settings& settings, bool bake) {
+                     const std::string& terms, const Settings& settings, bool bake,
+                     std::optional<double> max_error) {
   RenderRequest request;
   request.settings = settings;
+  request.max_error = max_error;
   if (!terms.empty()) request.terms = parse_terms(terms);
   CostEstimate c = estimate_cost(pipeline, scene, request, bake);
   const double mb = c.bytes() / double(1 << 20);

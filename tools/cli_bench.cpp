@@ -1,5 +1,9 @@
 // scatterd bench SCENE.json --pipeline NAME [--terms T] --sweep key=v1,v2,... [--set k=v ...]
 //                [--reference FILE.exr] [--reference-spp N] [--frames N] --csv OUT.csv
+// scatterd bench --calibrate TABLE.json [--quick] [--size N] [--voxels N] [SCENE.json ...]
+//
+// --calibrate writes the budget planner's calibration table (tools/calibrate.hpp); with scene
+// files it measures those instead of the calibration set (the Pareto plot's figures).
 //
 // For each value of the swept setting: bake time, the median frame time over --frames renders,
 // and the relative RMSE against a reference image of the same term over the pixels the medium
@@ -18,8 +22,10 @@
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "pipelines/budget/planner.hpp"
 #include "pipelines/metrics.hpp"
 #include "pipelines/pipeline.hpp"
+#include "tools/calibrate.hpp"
 #include "tools/commands.hpp"
 #include "tools/settings_option.hpp"
 
@@ -30,6 +36,7 @@ struct BenchOptions {
   std::string scene, pipeline, terms = "all", sweep, reference, csv, device;
   std::vector<std::string> settings;
   int reference_spp = 1024, frames = 3, width = 0, height = 0;
+  double max_error = 0;  // 0: none
 };
 
 struct Sweep {
@@ -104,6 +111,11 @@ Reference load_or_render_reference(const BenchOptions& o, const Scene& scene, Te
 }
 
 int run_bench(BenchOptions o) {
+  for (auto [value, name] : {std::pair{&o.pipeline, "--pipeline"},
+                             {&o.sweep, "--sweep"},
+                             {&o.csv, "--csv"},
+                             {&o.scene, "scene"}})
+    if (value->empty()) throw ValidationError(name, "is required (or give --calibrate)");
   Scene scene = load_scene(o.scene);
   if (o.width) scene.width = o.width;
   if (o.height) scene.height = o.height;
@@ -111,6 +123,7 @@ int run_bench(BenchOptions o) {
   Sweep sweep = parse_sweep(o.sweep);
   Settings base = parse_settings(o.settings);
   if (o.frames < 1 || o.frames > 1000) throw ValidationError("--frames", "must be in [1, 1000]");
+  if (o.max_error != 0) check_budget(o.pipeline, o.max_error, "--max-error");
   if (o.reference.empty()) {
     // Named by everything the reference depends on, so a changed scene or setting never reuses
     // a stale file: the scene file's text, the terms, the size, the sample count and the version
@@ -139,6 +152,7 @@ int run_bench(BenchOptions o) {
   for (double v : sweep.values) {
     RenderRequest request{terms, base, nullptr};
     request.settings[sweep.key] = v;
+    if (o.max_error != 0) request.max_error = o.max_error;
     auto t0 = std::chrono::steady_clock::now();
     pipeline->bake(scene, request);
     double bake_ms =
@@ -168,10 +182,10 @@ int run_bench(BenchOptions o) {
     std::sort(times.begin(), times.end());
     double median = times[times.size() / 2];
     double err = relative_rmse(last.image, ref.image, mask);
-    csv << o.pipeline << "," << std::filesystem::path(o.scene).stem().string() << "," << o.terms
-        << "," << scene.width << "," << scene.height << "," << sweep.key << "," << v << ","
-        << bake_ms << "," << median << "," << o.frames << "," << err << "," << ref.noise << ","
-        << stage_ms << "\n";
+    csv << (o.pipeline == "auto" ? last.plan.pipeline : o.pipeline) << ","
+        << std::filesystem::path(o.scene).stem().string() << "," << o.terms << "," << scene.width
+        << "," << scene.height << "," << sweep.key << "," << v << "," << bake_ms << "," << median
+        << "," << o.frames << "," << err << "," << ref.noise << "," << stage_ms << "\n";
     std::cout << o.pipeline << " " << sweep.key << "=" << v << ": frame " << median
               << " ms (median of " << o.frames << "), relative RMSE " << err << " (reference noise "
               << ref.noise << ")" << std::endl;
@@ -183,11 +197,13 @@ int run_bench(BenchOptions o) {
 
 Handler add_bench_command(CLI::App& app) {
   auto o = std::make_shared<BenchOptions>();
+  auto c = std::make_shared<CalibrateOptions>();
+  auto files = std::make_shared<std::vector<std::string>>();
   CLI::App* cmd = app.add_subcommand("bench", "Frame time against error, over a swept setting");
-  cmd->add_option("scene", o->scene, "Scene JSON file")->required();
-  cmd->add_option("--pipeline", o->pipeline, "Pipeline name")->required();
+  cmd->add_option("scene", *files, "Scene JSON file (with --calibrate: any number)");
+  cmd->add_option("--pipeline", o->pipeline, "Pipeline name");
   cmd->add_option("--terms", o->terms, "surface, single, multiple or all")->capture_default_str();
-  cmd->add_option("--sweep", o->sweep, "key=v1,v2,...: the setting to vary")->required();
+  cmd->add_option("--sweep", o->sweep, "key=v1,v2,...: the setting to vary");
   cmd->add_option("--set", o->settings, "Fixed setting key=value (repeatable)");
   cmd->add_option("--reference", o->reference,
                   "Reference EXR: read if it exists, else rendered there");
@@ -199,8 +215,26 @@ Handler add_bench_command(CLI::App& app) {
   cmd->add_option("--width", o->width, "Override the scene's image width");
   cmd->add_option("--height", o->height, "Override the scene's image height");
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");
-  cmd->add_option("--csv", o->csv, "Output CSV")->required();
-  return [o] { return run_bench(*o); };
+  cmd->add_option("--csv", o->csv, "Output CSV");
+  cmd->add_option("--max-error", o->max_error, "The budget auto plans by (a relative RMSE)");
+  cmd->add_option("--calibrate", c->out,
+                  "Write the budget planner's calibration table here (its version + 1)");
+  cmd->add_flag("--quick", c->quick, "--calibrate: two scenes, to try it");
+  cmd->add_option("--size", c->size, "--calibrate: image side")->capture_default_str();
+  cmd->add_option("--voxels", c->voxels, "--calibrate: voxels on the long side")
+      ->capture_default_str();
+  cmd->add_option("--max-spp", c->max_spp, "--calibrate: the references' samples, at most")
+      ->capture_default_str();
+  return [o, c, files] {
+    if (!c->out.empty()) {
+      c->scenes = *files;
+      c->device = o->device;
+      return run_calibration(*c);
+    }
+    if (files->size() > 1) throw ValidationError("scene", "one scene file (or give --calibrate)");
+    if (!files->empty()) o->scene = files->front();
+    return run_bench(*o);
+  };
 }
 
 }  // namespace scatter::tools

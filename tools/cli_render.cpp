@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "core/errors.hpp"
+#include "pipelines/budget/planner.hpp"
 #include "pipelines/pipeline.hpp"
 #include "tools/cache_option.hpp"
 #include "tools/commands.hpp"
@@ -19,6 +20,7 @@ struct RenderOptions {
   std::string terms;
   int width = -1, height = -1;  // -1: as the scene says
   double exposure = 1.0;
+  double max_error = 0;  // 0: none
   std::string device;
   std::vector<std::string> settings;
   CacheOptions cache;
@@ -67,6 +69,10 @@ int run_render(const RenderOptions& o) {
   auto pipeline = make_pipeline(o.pipeline, gpu, cache.get());
   RenderRequest request;
   request.settings = parse_settings(o.settings);
+  if (o.max_error != 0) {
+    check_budget(o.pipeline, o.max_error, "--max-error");
+    request.max_error = o.max_error;
+  }
   if (!o.terms.empty()) {
     request.terms = parse_terms(o.terms);
   } else {
@@ -98,6 +104,7 @@ int run_render(const RenderOptions& o) {
                         {"width", result.image.width},
                         {"height", result.image.height}};
     if (!std_error_file.empty()) j["std_error_output"] = std_error_file;
+    if (result.error_estimate) j["error_estimate"] = *result.error_estimate;
     j["stats"] = image_stats(result.image, scene.background);
     std::cout << j.dump() << "\n";
   } else {
@@ -123,6 +130,9 @@ Handler add_render_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");
   cmd->add_option("--set", o->settings, "Pipeline setting key=value (repeatable), e.g. spp=256");
+  cmd->add_option("--max-error", o->max_error,
+                  "The error accepted, a relative RMSE against the reference (auto plans by it; "
+                  "the reference samples until it is met), e.g. 0.05");
   add_cache_options(cmd, o->cache);
   cmd->add_flag("--json", o->json, "Print the plan and per-stage milliseconds as one JSON object");
   return [o] { return run_render(*o); };

@@ -6,6 +6,7 @@
 #include "pipelines/common/cl_library.hpp"
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/common/stage_clock.hpp"
+#include "pipelines/metrics.hpp"
 #include "scene/bvh.hpp"
 
 namespace scatter {
@@ -131,9 +132,23 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   cl::Kernel k(cl.program(program("kernels/reference/path.cl")), "path_trace");
   int terms = request.terms == Terms::Single ? 1 : (request.terms == Terms::Multiple ? 2 : 3);
   // Progressive passes of a few samples keep each launch short and let callers see progress.
+  // With a budget (max_error), spp is the expected count: the passes go on until the relative
+  // standard error is under the budget, checked every twelfth of the samples so far (whole
+  // rounds of the three channels), up to 8x spp.
   const int per_pass = std::min(s.spp, 4);
-  for (int done = 0; done < s.spp; done += per_pass) {
-    int n = std::min(per_pass, s.spp - done);
+  const int cap = request.max_error ? std::min(8 * s.spp, 1 << 20) : s.spp;
+  std::vector<float> host_sum(floats), host_sq(floats);
+  result.std_error = Image(w, h);
+  auto noise_now = [&](int spp) {
+    queue.enqueueReadBuffer(sum, CL_TRUE, 0, floats * sizeof(float), host_sum.data());
+    queue.enqueueReadBuffer(sum_sq, CL_TRUE, 0, floats * sizeof(float), host_sq.data());
+    finish_estimate(host_sum, host_sq, spp, result.image, *result.std_error);
+    return relative_norm(*result.std_error, result.image);
+  };
+  int spp = 0, next_check = 12;
+  std::optional<double> noise;
+  for (int done = 0; done < cap; done += per_pass) {
+    int n = std::min(per_pass, cap - done);
     gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz,
                   medium.bricks.brick, medium.bricks.bx, medium.bricks.by, medium.bricks.bz,
                   medium.sigma_s, medium.sigma_t, medium.majorant, lights, light_count, g, camera,
@@ -141,14 +156,24 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                   sum, sum_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
-    if (request.progress) request.progress(double(done + n) / s.spp);
+    spp = done + n;
+    if (request.progress) request.progress(double(spp) / cap);
+    if (request.max_error && spp >= next_check && spp % 12 == 0) {
+      noise = noise_now(spp);
+      if (*noise <= *request.max_error) break;
+      next_check = spp + std::max(12, spp / 12 / 12 * 12);
+    }
   }
   clock.stop("trace");
-  std::vector<float> host_sum(floats), host_sq(floats);
-  queue.enqueueReadBuffer(sum, CL_TRUE, 0, floats * sizeof(float), host_sum.data());
-  queue.enqueueReadBuffer(sum_sq, CL_TRUE, 0, floats * sizeof(float), host_sq.data());
-  result.std_error = Image(w, h);
-  finish_estimate(host_sum, host_sq, s.spp, result.image, *result.std_error);
+  noise = noise_now(spp);
+  result.error_estimate = noise;
+  if (request.max_error) {
+    plan_stage(result.plan, "trace").reason =
+        std::to_string(spp) + " samples per pixel: relative standard error " +
+        short_number(100 * *noise) + " % " +
+        (*noise <= *request.max_error ? "under" : "still over, at 8x the expected samples,") +
+        " the budget of " + short_number(100 * *request.max_error) + " %";
+  }
   clock.stop("readback");
   return result;
 }

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "../test_util.hpp"
+#include "pipelines/auto_pipeline.hpp"
 #include "pipelines/cost_support.hpp"
 #include "pipelines/pipeline.hpp"
 #include "protocol/json_reader.hpp"
@@ -78,14 +79,21 @@ TEST(CostTest, ShippedScenesAtTheirDefaultsFitTheDaemonsLimits) {
   }
 }
 
-TEST(CostTest, AutoEstimatesThePipelineItPicks) {
-  Scene s = shipped("sphere");  // homogeneous: single term -> thickness, all -> reference
-  EXPECT_EQ(estimate_cost("auto", s, request({}, Terms::Single)).bytes(),
-            estimate_cost("thickness", s, request({}, Terms::Single)).bytes());
-  EXPECT_EQ(estimate_cost("auto", s, request({{"spp", 8}})).seconds,
-            estimate_cost("reference", s, request({{"spp", 8}})).seconds);
-  EXPECT_NE(estimate_cost("auto", s, request({}, Terms::Single)).summary.find("auto -> thickness"),
-            std::string::npos);
+TEST(CostTest, AutoEstimatesTheWayItPicks) {
+  Scene s = shipped("sphere");
+  for (Terms terms : {Terms::Single, Terms::All}) {
+    RenderRequest r = request({}, terms);
+    BudgetChoice c = AutoPipeline::choose(s, r);
+    CostEstimate e = estimate_cost("auto", s, r);
+    double seconds = 0;
+    for (size_t i = 0; i < c.way.parts.size(); ++i) {
+      RenderRequest part{c.way.parts[i].terms, c.settings[i], {}};
+      if (c.sampled) part.max_error = kDefaultMaxError;
+      seconds += estimate_cost(c.way.parts[i].pipeline, s, part).seconds;
+    }
+    EXPECT_DOUBLE_EQ(e.seconds, seconds) << e.summary;
+    EXPECT_NE(e.summary.find("auto -> " + c.way.id()), std::string::npos) << e.summary;
+  }
 }
 
 TEST(CostTest, NamesTheFieldThatDrivesEachCost) {

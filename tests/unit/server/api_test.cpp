@@ -63,7 +63,8 @@ TEST_F(ApiTest, PipelinesCarryTheirSettingsTables) {
   EXPECT_EQ(lbl["default_terms"], "all");
   for (const auto& s : lbl["settings"])
     if (s["key"] == "directions") EXPECT_EQ(s["allowed"], nlohmann::json::array({6, 18}));
-  EXPECT_EQ(find("auto")["delegates"], nlohmann::json::array({"thickness", "reference"}));
+  EXPECT_EQ(find("auto")["delegates"],
+            nlohmann::json::array({"thickness", "single", "lbl", "psf", "reference"}));
   EXPECT_FALSE(find("psf")["bakes"].get<bool>());
 }
 
@@ -83,6 +84,35 @@ TEST_F(ApiTest, SettingsAreCheckedAtTheEdge) {
   r = call("POST", "/api/bakes", R"({"scene_name": "sphere", "pipeline": "psf"})");
   EXPECT_EQ(r.status, 400);
   EXPECT_NE(json(r)["error"].get<std::string>().find("needs no bake"), std::string::npos);
+}
+
+// quality.max_error: auto plans by it; a budget only a render past --max-render-s could meet is
+// refused naming it; pipelines that render at their own settings refuse it.
+TEST_F(ApiTest, ABudgetIsPlannedForOrRefusedByName) {
+  HttpResponse r = call("POST", "/api/render",
+                        R"({"scene_name": "sphere", "pipeline": "surface",
+                            "quality": {"max_error": 0.05}})");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(json(r)["field"], "quality.max_error");
+  r = call("POST", "/api/render",
+           R"({"scene_name": "sphere", "pipeline": "auto", "quality": {"max_error": 0}})");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(json(r)["field"], "quality.max_error");
+  r = call("POST", "/api/render",
+           R"({"scene_name": "bunny", "pipeline": "auto", "terms": "all",
+               "quality": {"max_error": 0.0001}})");
+  EXPECT_EQ(r.status, 413) << r.body;
+  EXPECT_EQ(json(r)["field"], "quality.max_error") << r.body;
+  r = call("POST", "/api/render",
+           R"({"scene_name": "sphere", "pipeline": "auto", "terms": "single", "format": "json",
+               "quality": {"max_error": 0.2}})");
+  ASSERT_EQ(r.status, 200) << r.body;
+  nlohmann::json plan = json(r)["plan"];
+  EXPECT_LE(plan["expected_error"].get<double>(), 0.2);
+  EXPECT_GT(plan["expected_seconds"].get<double>(), 0);
+  EXPECT_FALSE(plan["alternatives"].empty());
+  EXPECT_EQ(plan["stages"][0]["stage"], "choose");
+  EXPECT_NE(plan["stages"][0]["reason"].get<std::string>().find("budget 20 %"), std::string::npos);
 }
 
 TEST_F(ApiTest, UnknownRoutesMethodsAndBodiesAreClearErrors) {
@@ -143,8 +173,9 @@ TEST_F(ApiTest, RendersImagesWithPlanAndTimings) {
   req = {{"scene_name", "sphere"}, {"pipeline", "auto"}, {"terms", "single"}, {"format", "json"}};
   r = call("POST", "/api/render", req.dump());
   ASSERT_EQ(r.status, 200) << r.body;
-  EXPECT_EQ(json(r)["pipeline"], "auto -> thickness");
-  EXPECT_TRUE(json(r)["timings_ms"].contains("integrate"));
+  EXPECT_EQ(json(r)["pipeline"].get<std::string>().rfind("auto -> ", 0), 0u) << r.body;
+  EXPECT_LE(json(r)["plan"]["expected_error"].get<double>(), 0.1);  // the default budget
+  EXPECT_FALSE(json(r)["timings_ms"].empty());
 
   std::string metrics = call("GET", "/metrics").body;
   EXPECT_NE(metrics.find("scatter_frame_seconds_count{pipeline=\"auto\"} 1"), std::string::npos)

@@ -65,21 +65,5 @@ TEST(ThicknessPipeline, RefusesWhatItCannotRender) {
   EXPECT_THROW(p.render(sphere, {Terms::Single, {}, nullptr}), ValidationError);
 }
 
-TEST(AutoPipeline, ChoosesThicknessForHomogeneousSingleAndSaysWhy) {
-  Scene sphere = load_scene(test::source_path("scenes/sphere.json"));
-  Scene layers = load_scene(test::source_path("scenes/layers.json"));
-  EXPECT_EQ(AutoPipeline::choose(sphere, Terms::Single).first, "thickness");
-  EXPECT_EQ(AutoPipeline::choose(sphere, Terms::All).first, "reference");
-  EXPECT_EQ(AutoPipeline::choose(layers, Terms::Single).first, "reference");
-  AutoPipeline a(test::shared_gpu(), nullptr);
-  Plan p = a.plan(sphere, {Terms::Single, {}, nullptr});
-  EXPECT_EQ(p.pipeline, "auto -> thickness");
-  ASSERT_GE(p.stages.size(), 2u);
-  EXPECT_EQ(p.stages[0].name, "choose");
-  EXPECT_EQ(p.stages[1].name, "bake");
-  EXPECT_FALSE(p.stages[1].run);
-  EXPECT_NE(p.stages[1].reason.find("homogeneous"), std::string::npos);
-}
-
 }  // namespace
 }  // namespace scatter

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Figures for the budget planner in docs/BENCHMARKS.md ("Choosing by error budget"):
+#  1. every calibrated way (pipeline and quality, composites) on the four shipped scenes at
+#     SIZE x SIZE: frame time against relative RMSE, as a table (bench/out/pareto.json) and a
+#     plot per terms (docs/pareto-<terms>.png);
+#  2. what auto picks for budgets of 1 %, 5 % and 20 % on each shipped scene, all terms, and the
+#     error it reached against the reference (bench/out/budget-*.csv).
+# The shipped scenes are not calibration scenes. Takes about an hour on a 2-core CPU.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=bench/out
+size=${SIZE:-96}
+mkdir -p "$out"
+build/scatterd bench --calibrate "$out/pareto.json" --size "$size" \
+  scenes/sphere.json scenes/cube-torus.json scenes/layers.json scenes/bunny.json
+python3 bench/pareto.py "$out/pareto.json" docs
+for scene in sphere cube-torus layers bunny; do
+  for budget in 0.2 0.05 0.01; do
+    build/scatterd bench "scenes/$scene.json" --pipeline auto --terms all --width "$size" \
+      --height "$size" --sweep seed=1 --max-error "$budget" --frames 1 --reference-spp 4096 \
+      --csv "$out/budget-$scene-$budget.csv"
+  done
+done
+python3 - "$out" <<'PY'
+import csv, glob, os, sys
+print("| scene | budget | auto chose | frame | error reached | reference noise |")
+print("| --- | --- | --- | --- | --- | --- |")
+for f in sorted(glob.glob(os.path.join(sys.argv[1], "budget-*.csv"))):
+    for r in csv.DictReader(open(f)):
+        budget = f.rsplit("-", 1)[1][:-4]
+        print(f"| {r['scene']} | {float(budget) * 100:g} % | {r['pipeline']} | "
+              f"{float(r['frame_ms_median']):.0f} ms | {float(r['rel_rmse']) * 100:.2f} % | "
+              f"{float(r['reference_noise']) * 100:.2f} % |")
+PY

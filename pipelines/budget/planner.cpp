@@ -1,0 +1,246 @@
+#include "pipelines/budget/planner.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "core/errors.hpp"
+#include "pipelines/auto_pipeline.hpp"
+#include "pipelines/cost.hpp"
+#include "pipelines/registry.hpp"
+
+namespace scatter {
+namespace {
+
+std::string percent(double e) {
+  return short_number(100 * e) + " %";
+}
+
+std::string seconds(double s) {
+  return short_number(s) + " s";
+}
+
+// A render's seconds, its bake's counted only when it is not made yet.
+double part_seconds(const Scene& scene, const WayPart& part, const Settings& settings,
+                    const IsBaked& baked, bool* needs_bake) {
+  RenderRequest r{part.terms, settings, {}};
+  double s = estimate_cost(part.pipeline, scene, r, false).seconds;
+  *needs_bake = pipeline_info(part.pipeline).bakes();
+  if (*needs_bake && baked && baked(part.pipeline, settings)) {
+    s = std::max(0.0, s - estimate_cost(part.pipeline, scene, r, true).seconds);
+    *needs_bake = false;
+  }
+  return s;
+}
+
+// Why a way cannot render this scene at all, or empty.
+std::string unfit(const Way& way, const SceneClass& c) {
+  for (const WayPart& p : way.parts) {
+    if (!pipeline_info(p.pipeline).renders(p.terms))
+      return p.pipeline + " does not render the " + to_string(p.terms) + " term";
+    if (p.pipeline == "thickness" && c.light_inside)
+      return "thickness: a light inside the object's bounding sphere, which no shadow map sees";
+  }
+  return "";
+}
+
+}  // namespace
+
+void check_budget(const std::string& pipeline, double max_error, const std::string& field) {
+  if (!(max_error >= 1e-4 && max_error <= 1))
+    throw ValidationError(field, "must be in [0.0001, 1] (a relative RMSE), got " +
+                                     short_number(max_error));
+  if (pipeline != "auto" && pipeline != "reference")
+    throw ValidationError(field, "is planned for by pipeline auto (and met by the reference's "
+                                 "sample count); pipeline " +
+                                     pipeline + " renders at its own settings");
+}
+
+BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
+                         const Settings& request, const CalibrationTable& table,
+                         const IsBaked& baked) {
+  const double max_error = budget.max_error;
+  if (terms == Terms::Surface)
+    throw ValidationError("terms", "the budget planner renders single, multiple or all terms");
+  BudgetChoice best;
+  best.cls = classify(scene, terms);
+  best.expected_seconds = 1e300;
+  std::vector<BudgetChoice> others;
+
+  auto consider = [&](BudgetChoice c) {
+    if (c.expected_seconds < best.expected_seconds) {
+      if (best.expected_seconds < 1e300) others.push_back(std::move(best));
+      best = std::move(c);
+    } else {
+      others.push_back(std::move(c));
+    }
+  };
+  std::vector<PlanOption> rejected;  // unfit or not calibrated: never chosen
+  std::vector<BudgetChoice> over;     // over budget: chosen only as a soft budget's fallback
+
+  for (const std::string& id : table.ways(terms)) {
+    Way way = Way::parse(id, terms);
+    PlanOption o{id, {}, 0, 0, ""};
+    if (std::string why = unfit(way, best.cls); !why.empty()) {
+      o.note = "cannot: " + why;
+      rejected.push_back(o);
+      continue;
+    }
+    auto predicted = table.predict_error(best.cls, id);
+    if (!predicted) {
+      o.note = "not calibrated for " + std::string(best.cls.homogeneous ? "homogeneous" : "inhomogeneous") +
+               (best.cls.index_matched ? ", index-matched" : ", dielectric") + " media";
+      rejected.push_back(o);
+      continue;
+    }
+    BudgetChoice c;
+    c.way = way;
+    c.cls = best.cls;
+    c.expected_error = predicted->value;
+    c.expected_seconds = 0;
+    bool bakes = false;
+    for (size_t i = 0; i < way.parts.size(); ++i) {
+      Settings s = way.settings(i);
+      for (const auto& [k, v] : AutoPipeline::settings_for(way.parts[i].pipeline, request))
+        s[k] = v;
+      bool needs_bake = false;
+      c.expected_seconds += part_seconds(scene, way.parts[i], s, baked, &needs_bake);
+      bakes = bakes || needs_bake;
+      c.settings.push_back(std::move(s));
+    }
+    c.reason = id + ": expected " + percent(c.expected_error) + " (" + predicted->note + ") in " +
+               seconds(c.expected_seconds) + (bakes ? " including its bake" : "");
+    if (c.expected_error > max_error) {
+      over.push_back(std::move(c));
+      continue;
+    }
+    consider(std::move(c));
+  }
+
+  // The reference meets any budget.
+  BudgetChoice ref;
+  ref.cls = best.cls;
+  if (terms == Terms::Single) {
+    // The single term's reference is the marcher at its finest quality.
+    ref.way = Way::parse("reference:high", terms);
+    ref.settings = {ref.way.settings(0)};
+    for (const auto& [k, v] : AutoPipeline::settings_for("reference", request))
+      ref.settings[0][k] = v;
+    ref.expected_error = 0;
+    bool unused = false;
+    ref.expected_seconds = part_seconds(scene, ref.way.parts[0], ref.settings[0], baked, &unused);
+    ref.reason = "reference:high: the single term's reference itself (the marcher), in " +
+                 seconds(ref.expected_seconds);
+  } else {
+    // The path tracer for the multiple term; all terms add the marched single term to it.
+    ref.way = terms == Terms::All ? Way::parse("reference:high+reference:sampled", terms)
+                                  : Way{{{"reference", "sampled", terms}}};
+    ref.sampled = true;
+    auto noise = table.predict_noise(ref.cls);
+    std::string how;
+    if (noise) {
+      // Relative standard error noise / sqrt(spp), with a fifth to spare for the estimate's own
+      // scatter; at run time the path tracer samples until its standard error meets the budget.
+      double spp = std::ceil(1.2 * std::pow(noise->value / max_error, 2));
+      ref.expected_spp = static_cast<int>(std::clamp(std::ceil(spp / 12) * 12, 24.0, 1048572.0));
+      how = "noise " + short_number(noise->value) + "/sqrt(spp) (" + noise->note + ")";
+    } else {
+      ref.expected_spp = 256;
+      how = "its noise is not calibrated for this kind of medium: 256 spp expected";
+    }
+    Settings user = AutoPipeline::settings_for("reference", request);
+    Settings s = user;
+    s["spp"] = s.count("spp") ? std::min<double>(s["spp"], ref.expected_spp) : ref.expected_spp;
+    if (terms == Terms::All) {
+      Settings march = Way::parse("reference:high", Terms::Single).settings(0);
+      for (const auto& [k, v] : user) march[k] = v;
+      ref.settings.push_back(march);
+    }
+    ref.settings.push_back(s);
+    ref.expected_error = max_error;
+    ref.expected_seconds = 0;
+    for (size_t i = 0; i < ref.way.parts.size(); ++i) {
+      bool unused = false;
+      ref.expected_seconds +=
+          part_seconds(scene, ref.way.parts[i], ref.settings[i], baked, &unused);
+    }
+    ref.reason = ref.way.id() + ": the path tracer" +
+                 (terms == Terms::All ? " (plus the marched single term)" : "") +
+                 ", sampled until its relative standard error is under " + percent(max_error) +
+                 ": about " + std::to_string(ref.expected_spp) + " spp from its " + how + ", " +
+                 seconds(ref.expected_seconds);
+  }
+  // The path tracer with as many samples as fit the soft budget's time: a fallback candidate.
+  std::optional<BudgetChoice> capped;
+  if (ref.sampled && budget.soft && ref.expected_seconds > budget.soft_seconds) {
+    BudgetChoice c = ref;
+    Settings& s = c.settings.back();
+    bool unused = false;
+    double at_spp = ref.expected_seconds, spp = s["spp"];
+    s["spp"] = 12;
+    double at_12 = 0;
+    for (size_t i = 0; i < c.way.parts.size(); ++i)
+      at_12 += part_seconds(scene, c.way.parts[i], c.settings[i], baked, &unused);
+    double per_sample = (at_spp - at_12) / std::max(1.0, spp - 12);
+    double fit = per_sample > 0 ? 12 + (budget.soft_seconds - at_12) / per_sample : spp;
+    int n = static_cast<int>(std::floor(fit / 12) * 12);
+    if (n >= 12 && ref.expected_spp > 0) {
+      s["spp"] = n;
+      c.sampled = false;  // exactly n samples: no budget to sample towards
+      c.expected_spp = n;
+      c.expected_error = max_error * std::sqrt(double(ref.expected_spp) / n) / std::sqrt(1.2);
+      c.expected_seconds = budget.soft_seconds;
+      c.reason = c.way.id() + ": the path tracer at " + std::to_string(n) +
+                 " spp, what fits " + seconds(budget.soft_seconds) + ": expected " +
+                 percent(c.expected_error);
+      capped = std::move(c);
+    }
+  }
+  consider(std::move(ref));
+
+  // A soft budget (none was asked for) does not wait for the reference: past soft_seconds, the
+  // most accurate way expected within them.
+  if (budget.soft && best.expected_seconds > budget.soft_seconds) {
+    std::vector<BudgetChoice*> quick;
+    for (auto* list : {&others, &over})
+      for (BudgetChoice& c : *list)
+        if (c.expected_seconds <= budget.soft_seconds) quick.push_back(&c);
+    if (capped) quick.push_back(&*capped);
+    if (!quick.empty()) {
+      BudgetChoice* pick = *std::min_element(
+          quick.begin(), quick.end(),
+          [](const BudgetChoice* a, const BudgetChoice* b) {
+            return a->expected_error < b->expected_error;
+          });
+      BudgetChoice chosen = std::move(*pick);
+      if (capped && pick == &*capped) {
+        capped.reset();
+      } else {
+        for (auto* list : {&others, &over})
+          list->erase(std::remove_if(list->begin(), list->end(),
+                                     [](const BudgetChoice& c) { return c.way.parts.empty(); }),
+                      list->end());
+      }
+      others.push_back(std::move(best));
+      best = std::move(chosen);
+      best.reason = "nothing meets it within " + seconds(budget.soft_seconds) +
+                    "; the most accurate way expected within them: " + best.reason;
+    }
+  }
+  if (capped) others.push_back(std::move(*capped));
+
+  for (const BudgetChoice& c : others)
+    best.alternatives.push_back({c.way.id(), c.settings.size() == 1 ? c.settings[0] : Settings{},
+                                 c.expected_error, c.expected_seconds, "slower: " + c.reason});
+  for (const BudgetChoice& c : over)
+    best.alternatives.push_back({c.way.id(), c.settings.size() == 1 ? c.settings[0] : Settings{},
+                                 c.expected_error, c.expected_seconds,
+                                 "over budget: " + c.reason});
+  for (PlanOption& o : rejected) best.alternatives.push_back(std::move(o));
+  best.reason = "budget " + percent(max_error) +
+                (budget.soft ? " (the default; quality.max_error sets one)" : "") + ", " +
+                describe(best.cls) + ": " + best.reason;
+  return best;
+}
+
+}  // namespace scatter

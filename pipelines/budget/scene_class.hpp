@@ -1,0 +1,37 @@
+// What the budget planner knows of a scene before it renders it: the class the calibration table
+// is indexed by (docs/pipelines/auto.md). Computed from the scene alone in microseconds.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "pipelines/pipeline.hpp"
+#include "scene/scene.hpp"
+
+namespace scatter {
+
+struct SceneClass {
+  Terms terms = Terms::All;
+  bool homogeneous = true;    // a constant density and no blocker
+  bool index_matched = true;  // ior 1: no Fresnel boundary
+  double albedo = 0.9;        // sigma_s / sigma_t, mean over the channels
+  double tau = 1;             // optical size: mean sigma_t x mean density x the object's size
+  double g = 0;
+  bool light_inside = false;  // a point or spot light inside the object's bounding sphere
+
+  // The continuous features, scaled so that one unit is about one step of the calibration grid:
+  // log2(tau) / 2, -log10(1 - albedo) and g / 0.7.
+  double feature(int i) const;
+  static constexpr int kFeatures = 3;
+  static const char* feature_name(int i);
+};
+
+SceneClass classify(const Scene& scene, Terms terms);
+
+// "homogeneous, index matched, albedo 0.97, tau 5.2, g 0"
+std::string describe(const SceneClass& c);
+
+void to_json(nlohmann::json& j, const SceneClass& c);
+void from_json(const nlohmann::json& j, SceneClass& c);
+
+}  // namespace scatter

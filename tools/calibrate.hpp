@@ -1,0 +1,37 @@
+// scatterd bench --calibrate OUT.json: the budget planner's calibration table
+// (pipelines/budget/calibration.hpp). Renders each calibration scene with every calibrated way
+// and the reference, and writes each way's relative RMSE against the reference of its terms,
+// its frame time, and the reference path tracer's noise per sample.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "scene/scene.hpp"
+
+namespace scatter::tools {
+
+struct CalibrateOptions {
+  std::string out;                  // the table to write (its version is the old file's + 1)
+  std::vector<std::string> scenes;  // scene files instead of the calibration set (a Pareto run)
+  int size = 48;                    // image side
+  int voxels = 64;
+  double target_noise = 0.01;  // the references' relative noise
+  int max_spp = 4096;
+  bool quick = false;  // a few scenes: to try the command, not to ship
+  std::string device;
+};
+
+struct NamedScene {
+  std::string name;
+  Scene scene;
+};
+
+// The calibration set (27 scenes): constant-density spheres at albedo 0.6, 0.9, 0.99, tau 1, 4,
+// 16, g 0 and 0.7; boxes of noise density at albedo 0.6, 0.9, 0.99, tau 2 and 8 (and one at
+// g 0.7); two dielectric spheres (ior 1.4). None of the shipped scenes is among them.
+std::vector<NamedScene> calibration_scenes(const CalibrateOptions& o);
+
+int run_calibration(const CalibrateOptions& o);
+
+}  // namespace scatter::tools
