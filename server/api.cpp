@@ -411,13 +411,16 @@ void Api::render(const HttpRequest& http, const Respond& respond) {
           nlohmann::json timings = nlohmann::json::object();
           for (const auto& t : result.timings) timings[t.stage] = t.ms;
           nlohmann::json plan = result.plan;
-          if (format == "json")
-            return respond(json_response({{"pipeline", result.plan.pipeline},
-                                          {"plan", plan},
-                                          {"timings_ms", timings},
-                                          {"queue_wait_ms", o.wait_ms},
-                                          {"width", result.image.width},
-                                          {"height", result.image.height}}));
+          if (format == "json") {
+            nlohmann::json j = {{"pipeline", result.plan.pipeline},
+                                {"plan", plan},
+                                {"timings_ms", timings},
+                                {"queue_wait_ms", o.wait_ms},
+                                {"width", result.image.width},
+                                {"height", result.image.height}};
+            if (result.error_estimate) j["error_estimate"] = *result.error_estimate;
+            return respond(json_response(j));
+          }
           HttpResponse response{
               200,
               format == "exr" ? "image/x-exr" : (format == "png" ? "image/png" : "image/jpeg"),
@@ -427,6 +430,9 @@ void Api::render(const HttpRequest& http, const Respond& respond) {
                               {"X-Scatter-Plan", plan.dump()},
                               {"X-Scatter-Timings", timings.dump()},
                               {"X-Scatter-Queue-Wait-Ms", short_number(o.wait_ms)}};
+          if (result.error_estimate)
+            response.headers.push_back(
+                {"X-Scatter-Error-Estimate", short_number(*result.error_estimate)});
           respond(std::move(response));
         });
       });

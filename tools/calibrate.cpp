@@ -27,14 +27,12 @@ double ms_since(Clock::time_point t) {
 // The single- and multiple-term ways whose sums are the composites, and the ways that render a
 // terms whole. (Measured here: psf's qualities change only its single term's step, and the
 // reference's "normal" marcher matches "draft" within 0.1 %; lbl's "high" takes ~30 s a frame.)
-const std::vector<std::string> kSingleWays = {"thickness:draft", "thickness:normal",
-                                              "single:draft",    "single:normal",
-                                              "reference:draft", "psf:normal",
+const std::vector<std::string> kSingleWays = {"thickness:draft", "thickness:normal", "single:draft",
+                                              "single:normal",   "reference:draft",  "psf:normal",
                                               "lbl:normal"};
 const std::vector<std::string> kMultipleWays = {"lbl:draft", "lbl:normal", "psf:normal"};
-const std::vector<std::string> kCompositeSingles = {"thickness:draft", "thickness:normal",
-                                                    "single:draft", "reference:draft",
-                                                    "psf:normal"};
+const std::vector<std::string> kCompositeSingles = {
+    "thickness:draft", "thickness:normal", "single:draft", "reference:draft", "psf:normal"};
 const std::vector<std::string> kCompositeMultiples = {"lbl:draft", "lbl:normal", "psf:normal"};
 
 // The error against a Monte Carlo reference with its noise taken out: the expected squared
@@ -46,7 +44,7 @@ double debiased(double measured, double reference_noise) {
 nlohmann::json scene_json(const std::string& shape, double albedo, double tau, double g,
                           const std::string& density, double ior, int size, int voxels) {
   // sigma_t so that sigma_t x mean density x size = tau; a slightly chromatic albedo.
-  const double extent = 2;  // sphere of radius 1, box of side 2
+  const double extent = 2;                                     // sphere of radius 1, box of side 2
   const double mean_density = density == "noise" ? 0.6 : 1.0;  // noise in [0.2, 1]
   double sigma_t = tau / (extent * mean_density);
   nlohmann::json ss = nlohmann::json::array(), sa = nlohmann::json::array();
@@ -55,22 +53,23 @@ nlohmann::json scene_json(const std::string& shape, double albedo, double tau, d
     ss.push_back(sigma_t * a);
     sa.push_back(sigma_t * (1 - a));
   }
-  nlohmann::json mesh = shape == "sphere"
-                            ? nlohmann::json{{"shape", "sphere"}, {"radius", 1.0}}
-                            : nlohmann::json{{"shape", "box"}, {"size", {2, 2, 2}}};
-  nlohmann::json d = density == "noise"
-                         ? nlohmann::json{{"type", "noise"}, {"scale", 2.5}, {"min", 0.2},
-                                          {"max", 1.0}, {"seed", 3}}
-                         : nlohmann::json{{"type", "constant"}};
-  return {{"mesh", mesh},
-          {"medium", {{"sigma_s", ss}, {"sigma_a", sa}, {"g", g}, {"ior", ior}, {"density", d}}},
-          {"lights",
-           {{{"type", "point"}, {"position", {2.5, 2.5, 3}}, {"color", {1, 1, 1}},
-             {"intensity", 20}}}},
-          {"camera",
-           {{"position", {0.6, 0.8, 4}}, {"target", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_deg", 45}}},
-          {"image", {{"width", size}, {"height", size}}},
-          {"voxels", voxels}};
+  nlohmann::json mesh = shape == "sphere" ? nlohmann::json{{"shape", "sphere"}, {"radius", 1.0}}
+                                          : nlohmann::json{{"shape", "box"}, {"size", {2, 2, 2}}};
+  nlohmann::json d = density == "noise" ? nlohmann::json{{"type", "noise"},
+                                                         {"scale", 2.5},
+                                                         {"min", 0.2},
+                                                         {"max", 1.0},
+                                                         {"seed", 3}}
+                                        : nlohmann::json{{"type", "constant"}};
+  return {
+      {"mesh", mesh},
+      {"medium", {{"sigma_s", ss}, {"sigma_a", sa}, {"g", g}, {"ior", ior}, {"density", d}}},
+      {"lights",
+       {{{"type", "point"}, {"position", {2.5, 2.5, 3}}, {"color", {1, 1, 1}}, {"intensity", 20}}}},
+      {"camera",
+       {{"position", {0.6, 0.8, 4}}, {"target", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_deg", 45}}},
+      {"image", {{"width", size}, {"height", size}}},
+      {"voxels", voxels}};
 }
 
 struct Rendered {
@@ -85,10 +84,11 @@ std::vector<NamedScene> calibration_scenes(const CalibrateOptions& o) {
   auto add = [&](const std::string& shape, double albedo, double tau, double g,
                  const std::string& density, double ior) {
     std::string name = shape + "-a" + short_number(albedo) + "-t" + short_number(tau) + "-g" +
-                       short_number(g) + "-" + density + (ior != 1 ? "-ior" + short_number(ior) : "");
-    out.push_back({name, parse_scene(scene_json(shape, albedo, tau, g, density, ior, o.size,
-                                                o.voxels),
-                                     ".")});
+                       short_number(g) + "-" + density +
+                       (ior != 1 ? "-ior" + short_number(ior) : "");
+    out.push_back(
+        {name,
+         parse_scene(scene_json(shape, albedo, tau, g, density, ior, o.size, o.voxels), ".")});
   };
   if (o.quick) {
     add("sphere", 0.9, 4, 0, "constant", 1);
@@ -171,10 +171,10 @@ int run_calibration(const CalibrateOptions& o) {
       RenderRequest pilot{Terms::Multiple, {{"spp", 24}, {"seed", 7919}}, {}};
       RenderResult p = pipeline("reference").render(scene, pilot);
       double c = relative_norm(*p.std_error, p.image, mask) * std::sqrt(24.0);
-      double spp = std::clamp(std::ceil(std::pow(c / o.target_noise, 2) / 12) * 12, 48.0,
-                              double(o.max_spp));
-      RenderResult r = pipeline("reference").render(
-          scene, {Terms::Multiple, {{"spp", spp}, {"seed", 7919}}, {}});
+      double spp =
+          std::clamp(std::ceil(std::pow(c / o.target_noise, 2) / 12) * 12, 48.0, double(o.max_spp));
+      RenderResult r = pipeline("reference")
+                           .render(scene, {Terms::Multiple, {{"spp", spp}, {"seed", 7919}}, {}});
       double noise = relative_norm(*r.std_error, r.image, mask);
       Image all = reference[Terms::Single];
       for (size_t k = 0; k < all.rgb.size(); ++k) all.rgb[k] += r.image.rgb[k];

@@ -21,10 +21,12 @@ Way Way::parse(const std::string& id, Terms terms) {
   size_t start = 0;
   while (start <= id.size()) {
     size_t plus = id.find('+', start);
-    std::string item = id.substr(start, plus == std::string::npos ? std::string::npos : plus - start);
+    std::string item =
+        id.substr(start, plus == std::string::npos ? std::string::npos : plus - start);
     size_t colon = item.find(':');
     if (colon == std::string::npos || colon == 0 || colon + 1 == item.size())
-      throw std::invalid_argument("way \"" + id + "\": expected pipeline:quality[+pipeline:quality]");
+      throw std::invalid_argument("way \"" + id +
+                                  "\": expected pipeline:quality[+pipeline:quality]");
     w.parts.push_back({item.substr(0, colon), item.substr(colon + 1), terms});
     if (plus == std::string::npos) break;
     start = plus + 1;
@@ -137,9 +139,37 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
   std::sort(near.begin(), near.end(),
             [](const Near& a, const Near& b) { return a.distance < b.distance; });
   Prediction p;
-  size_t k = std::min<size_t>(2, near.size());
-  for (size_t i = 0; i < k; ++i) p.value = std::max(p.value, near[i].value);
-  p.note = "from " + near[0].entry->scene + (k > 1 ? " and " + near[1].entry->scene : "");
+  // The calibration grid's cell around the scene: per feature, the nearest calibrated values at
+  // or below and at or above it. The prediction is the worst of the scenes in that cell (the
+  // error need not be monotone in any one feature, but is bounded by its corners better than by
+  // its nearest neighbour); with none there, the worse of the two nearest.
+  double below[SceneClass::kFeatures], above[SceneClass::kFeatures];
+  for (int i = 0; i < SceneClass::kFeatures; ++i) {
+    below[i] = -1e300;
+    above[i] = 1e300;
+    for (const Near& n : near) {
+      double f = n.entry->cls.feature(i), x = c.feature(i);
+      if (f <= x + 1e-9) below[i] = std::max(below[i], f);
+      if (f >= x - 1e-9) above[i] = std::min(above[i], f);
+    }
+  }
+  int in_cell = 0;
+  for (const Near& n : near) {
+    bool inside = true;
+    for (int i = 0; i < SceneClass::kFeatures; ++i) {
+      double f = n.entry->cls.feature(i);
+      inside = inside && f >= below[i] - 1e-9 && f <= above[i] + 1e-9;
+    }
+    if (!inside) continue;
+    if (n.value >= p.value) p.note = "the worst of its calibration cell: " + n.entry->scene;
+    p.value = std::max(p.value, n.value);
+    ++in_cell;
+  }
+  if (in_cell == 0) {
+    size_t k = std::min<size_t>(2, near.size());
+    for (size_t i = 0; i < k; ++i) p.value = std::max(p.value, near[i].value);
+    p.note = "from " + near[0].entry->scene + (k > 1 ? " and " + near[1].entry->scene : "");
+  }
   std::string outside;
   for (int i = 0; i < SceneClass::kFeatures; ++i) {
     double f = c.feature(i);

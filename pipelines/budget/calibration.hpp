@@ -58,10 +58,11 @@ class CalibrationTable {
   int width = 0, height = 0;
   std::vector<CalibrationEntry> entries;
 
-  // What the table says of `way` for a scene of class `c`: the larger error of the two nearest
-  // calibration scenes of the same kind (terms, homogeneous, index matched) that measured it,
-  // doubled when the scene lies outside the range those scenes span. Nothing when no scene of
-  // its kind measured the way.
+  // What the table says of `way` for a scene of class `c`, among the calibration scenes of the
+  // same kind (terms, homogeneous, index matched) that measured it: the worst error in the grid
+  // cell around the scene (per feature, the calibrated values bracketing it; the two nearest
+  // where the cell holds none), doubled when the scene lies outside the range they span. Nothing
+  // when no scene of its kind measured the way.
   struct Prediction {
     double value = 0;
     bool inside = true;

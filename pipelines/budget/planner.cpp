@@ -48,12 +48,13 @@ std::string unfit(const Way& way, const SceneClass& c) {
 
 void check_budget(const std::string& pipeline, double max_error, const std::string& field) {
   if (!(max_error >= 1e-4 && max_error <= 1))
-    throw ValidationError(field, "must be in [0.0001, 1] (a relative RMSE), got " +
-                                     short_number(max_error));
+    throw ValidationError(
+        field, "must be in [0.0001, 1] (a relative RMSE), got " + short_number(max_error));
   if (pipeline != "auto" && pipeline != "reference")
-    throw ValidationError(field, "is planned for by pipeline auto (and met by the reference's "
-                                 "sample count); pipeline " +
-                                     pipeline + " renders at its own settings");
+    throw ValidationError(field,
+                          "is planned for by pipeline auto (and met by the reference's "
+                          "sample count); pipeline " +
+                              pipeline + " renders at its own settings");
 }
 
 BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
@@ -76,7 +77,7 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     }
   };
   std::vector<PlanOption> rejected;  // unfit or not calibrated: never chosen
-  std::vector<BudgetChoice> over;     // over budget: chosen only as a soft budget's fallback
+  std::vector<BudgetChoice> over;    // over budget: chosen only as a soft budget's fallback
 
   for (const std::string& id : table.ways(terms)) {
     Way way = Way::parse(id, terms);
@@ -88,7 +89,8 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     }
     auto predicted = table.predict_error(best.cls, id);
     if (!predicted) {
-      o.note = "not calibrated for " + std::string(best.cls.homogeneous ? "homogeneous" : "inhomogeneous") +
+      o.note = "not calibrated for " +
+               std::string(best.cls.homogeneous ? "homogeneous" : "inhomogeneous") +
                (best.cls.index_matched ? ", index-matched" : ", dielectric") + " media";
       rejected.push_back(o);
       continue;
@@ -190,9 +192,8 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
       c.expected_spp = n;
       c.expected_error = max_error * std::sqrt(double(ref.expected_spp) / n) / std::sqrt(1.2);
       c.expected_seconds = budget.soft_seconds;
-      c.reason = c.way.id() + ": the path tracer at " + std::to_string(n) +
-                 " spp, what fits " + seconds(budget.soft_seconds) + ": expected " +
-                 percent(c.expected_error);
+      c.reason = c.way.id() + ": the path tracer at " + std::to_string(n) + " spp, what fits " +
+                 seconds(budget.soft_seconds) + ": expected " + percent(c.expected_error);
       capped = std::move(c);
     }
   }
@@ -207,11 +208,10 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
         if (c.expected_seconds <= budget.soft_seconds) quick.push_back(&c);
     if (capped) quick.push_back(&*capped);
     if (!quick.empty()) {
-      BudgetChoice* pick = *std::min_element(
-          quick.begin(), quick.end(),
-          [](const BudgetChoice* a, const BudgetChoice* b) {
-            return a->expected_error < b->expected_error;
-          });
+      BudgetChoice* pick = *std::min_element(quick.begin(), quick.end(),
+                                             [](const BudgetChoice* a, const BudgetChoice* b) {
+                                               return a->expected_error < b->expected_error;
+                                             });
       BudgetChoice chosen = std::move(*pick);
       if (capped && pick == &*capped) {
         capped.reset();
@@ -234,8 +234,7 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
                                  c.expected_error, c.expected_seconds, "slower: " + c.reason});
   for (const BudgetChoice& c : over)
     best.alternatives.push_back({c.way.id(), c.settings.size() == 1 ? c.settings[0] : Settings{},
-                                 c.expected_error, c.expected_seconds,
-                                 "over budget: " + c.reason});
+                                 c.expected_error, c.expected_seconds, "over budget: " + c.reason});
   for (PlanOption& o : rejected) best.alternatives.push_back(std::move(o));
   best.reason = "budget " + percent(max_error) +
                 (budget.soft ? " (the default; quality.max_error sets one)" : "") + ", " +

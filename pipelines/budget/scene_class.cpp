@@ -49,8 +49,8 @@ SceneClass classify(const Scene& scene, Terms terms) {
         ++n;
       }
   density = n ? density / n : 0;
-  double extent = std::cbrt(std::max(size.x, 1e-9) * std::max(size.y, 1e-9) *
-                            std::max(size.z, 1e-9));
+  double extent =
+      std::cbrt(std::max(size.x, 1e-9) * std::max(size.y, 1e-9) * std::max(size.z, 1e-9));
   c.tau = sigma_t / 3 * density * extent;
   for (const Light& l : scene.lights)
     if (l.type != Light::Type::Directional &&
@@ -67,9 +67,12 @@ std::string describe(const SceneClass& c) {
 }
 
 void to_json(nlohmann::json& j, const SceneClass& c) {
-  j = {{"terms", to_string(c.terms)}, {"homogeneous", c.homogeneous},
-       {"index_matched", c.index_matched}, {"albedo", c.albedo},
-       {"tau", c.tau}, {"g", c.g},
+  j = {{"terms", to_string(c.terms)},
+       {"homogeneous", c.homogeneous},
+       {"index_matched", c.index_matched},
+       {"albedo", c.albedo},
+       {"tau", c.tau},
+       {"g", c.g},
        {"light_inside", c.light_inside}};
 }
 
