@@ -129,6 +129,24 @@ async function bake() {
   }
 }
 
+// A still view is refined (docs/API.md, "Refinement"): each frame may carry its estimated error
+// (relative RMSE against the reference) and how far refining got; this says both in a line.
+function refineText(refine, error) {
+  const e = error === undefined ? '' : `error ≈ ${(100 * error).toPrecision(2)} %`;
+  if (!refine) return e;
+  if (refine.state === 'converged') return `${e} · converged (under ${100 * refine.floor} %)`;
+  if (refine.state === 'done') return e ? `${e} · refined` : '';
+  const step = refine.stage === 'reference' ? `reference pass ${refine.pass}, ${refine.spp} spp`
+    : refine.stage === 'quality' ? `quality ${refine.quality}` : 'full size';
+  return `${e ? e + ' · ' : ''}converging (${step})`;
+}
+
+function showRefine(refine, error) {
+  $('refine').textContent = refineText(refine, error);
+  canvas.dataset.error = error === undefined ? '' : String(error);
+  canvas.dataset.refine = refine ? refine.state : '';
+}
+
 function connect() {
   const token = new URLSearchParams(location.search).get('token');
   const url = `ws://${location.host}/api/ws${token ? '?token=' + encodeURIComponent(token) : ''}`;
@@ -145,6 +163,7 @@ function connect() {
       const msg = JSON.parse(event.data);
       if (msg.type === 'error') $('status').textContent = 'error: ' + msg.error;
       else if (msg.type === 'frame') state.header = msg;
+      else if (msg.type === 'refine') showRefine(msg.refine, msg.error_estimate);  // ended unsent
       return;
     }
     const header = state.header;
@@ -158,6 +177,7 @@ function connect() {
     $('rtt').textContent = (performance.now() - state.sentAt).toFixed(0);
     $('stages').textContent = header ? `${header.pipeline}: ` + Object.entries(header.timings_ms)
       .map(([k, v]) => `${k} ${v.toFixed(1)}`).join(' · ') + ' ms' : '';
+    if (header) showRefine(header.refine, header.error_estimate);
     $('status').textContent = 'connected';
     canvas.dataset.frames = String(state.frames);
     canvas.dataset.revision = header ? String(header.camera_revision) : '0';
