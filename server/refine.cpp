@@ -27,6 +27,7 @@ bool affordable(const std::string& pipeline, const Scene& scene, Terms terms,
   try {
     CostEstimate c = estimate_cost(pipeline, scene, r);
     return (o.max_render_s <= 0 || c.seconds <= o.max_render_s) &&
+           (o.step_max_s <= 0 || c.seconds <= o.step_max_s) &&
            (o.max_request_mb <= 0 || c.bytes() / double(1 << 20) <= o.max_request_mb);
   } catch (const ValidationError&) {
     return false;
@@ -105,12 +106,12 @@ Refinement::Refinement(const Scene& scene, const std::string& pipeline, const st
   if (terms_ == Terms::Single) pass_settings_["mc"] = 1;
   seed_ = own ? static_cast<int>(ReferenceSettings::read(settings).seed) : 1;
   Settings probe = pass_settings_;
-  probe["spp"] = 3;
+  probe["spp"] = kMinPassSpp;
   RenderRequest r;
   r.terms = terms_;
   r.settings = probe;
   if (!affordable("reference", scene_, terms_, probe, options_)) return;
-  double per_spp = estimate_cost("reference", scene_, r).seconds / 3;
+  double per_spp = estimate_cost("reference", scene_, r).seconds / kMinPassSpp;
   spp_ = round_spp(per_spp > 0 ? options_.pass_seconds / per_spp : kMaxPassSpp);
   reference_ = true;
 }

@@ -32,6 +32,9 @@ struct RefineOptions {
   double pass_seconds = 1.0;  // what one reference pass aims to take
   // Steps estimated past these are left out (--max-render-s, --max-request-mb; 0: no limit).
   double max_render_s = 0, max_request_mb = 0;
+  // And steps estimated past this (0: no limit): a refinement job holds the render thread, which
+  // the other sessions share, so each stays short (a live session passes 10 x pass_seconds).
+  double step_max_s = 0;
 };
 
 // One render of the refinement.

@@ -127,7 +127,7 @@ void WsSession::read_hello(nlohmann::json msg) {
       spec = Api::read_render_spec(m, msg, self->options_, self->api_.scenes());
       m.finish();
       Api::check_cost(self->options_, spec->pipeline, *spec->scene, spec->terms, spec->settings,
-                      false);
+                      false, spec->max_error);
     } catch (const ValidationError& e) {
       spec.reset();
       error = e.what();
@@ -221,7 +221,7 @@ void WsSession::handle(const std::string& text) {
     std::vector<Light> lights = parse_lights(msg["lights"], "lights");
     Scene lit = *scene_;  // the cost depends on the number of lights (the mesh is shared)
     lit.lights = lights;
-    Api::check_cost(options_, pipeline_, lit, terms_, settings_, false);
+    Api::check_cost(options_, pipeline_, lit, terms_, settings_, false, max_error_);
     lights_ = std::move(lights);
     light_revision_ = rev;
     dirty_ = true;
@@ -278,7 +278,8 @@ void WsSession::maybe_render() {
                     .max_passes = options_.refine_max_passes,
                     .pass_seconds = options_.refine_pass_s,
                     .max_render_s = options_.max_render_s,
-                    .max_request_mb = options_.max_request_mb};
+                    .max_request_mb = options_.max_request_mb,
+                    .step_max_s = 10 * options_.refine_pass_s};
     try {
       refine_ = Refinement(view, pipeline_, terms_, settings_, o);
     } catch (const std::exception& e) {  // validated by the hello: not expected

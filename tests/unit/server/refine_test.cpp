@@ -177,9 +177,11 @@ TEST(RefineTest, WhatNeedsNoRefiningEndsAfterTheFullFrame) {
   ASSERT_TRUE(step);
   EXPECT_EQ(step->quality, "high");
   EXPECT_EQ(marcher.take(*step, full).state, State::Done);
-  // Passes the server's time limit would refuse are left out.
+  // Steps the server's time limit would refuse, or past the step limit, are left out.
   Refinement limited(sphere(), "thickness", "", {}, {.max_render_s = 1e-9});
   EXPECT_EQ(limited.take(*limited.next(), full).state, State::Done);
+  Refinement brief(sphere(), "thickness", "", {}, {.step_max_s = 1e-9});  // each step short
+  EXPECT_EQ(brief.take(*brief.next(), full).state, State::Done);
   // An estimate already at the floor.
   Refinement good(sphere(), "thickness", "", {}, {.floor = 0.05});
   RenderResult exact = result(0.1, 0.01);
