@@ -357,11 +357,11 @@ void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
     extra["refine"] = refine_.describe(*frame_step_, out.state);
     if (!out.send) {  // not better by a tenth: the next step starts at once, nothing to ack
       in_flight_ = 0;
-      if (out.state != Refinement::State::Converging) {
-        nlohmann::json end = {{"type", "refine"}, {"refine", extra["refine"]}};
-        if (auto e = refine_.last_sent()) end["error_estimate"] = *e;
-        send(end.dump(), false);
-      }
+      // Said, without the image, so that a client can show how far the steps not shown got.
+      nlohmann::json note = {{"type", "refine"}, {"refine", extra["refine"]}};
+      if (out.estimate) note["error_estimate"] = *out.estimate;
+      if (auto e = refine_.last_sent()) note["shown_error_estimate"] = *e;
+      send(note.dump(), false);
       return maybe_render();
     }
   }

@@ -17,8 +17,8 @@
 // "reduced": false), the pipeline's higher qualities, then accumulated reference passes, each
 // refined frame's header with "error_estimate" and "refine": {"stage", "state", ...}, sent only
 // when its estimate dropped by a tenth, until it is under refine_floor or the passes run out. A
-// refinement step whose result is not sent frees the slot at once (nothing to ack); one that ends
-// the refinement unsent is told as {"type": "refine", "refine", "error_estimate"}. A camera,
+// refinement step whose result is not sent frees the slot at once (nothing to ack) and is told
+// as {"type": "refine", "refine", "error_estimate", "shown_error_estimate"}. A camera,
 // lights or hello message cancels a still frame not yet sent (its render stops at its next
 // progress check; the new pose's job queues behind it). Each session otherwise has at most one
 // job on the render thread's FIFO queue, so sessions take turns. The render thread posts the

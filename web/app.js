@@ -143,8 +143,19 @@ function refineText(refine, error) {
 
 function showRefine(refine, error) {
   $('refine').textContent = refineText(refine, error);
+  $('refine-next').textContent = '';
   canvas.dataset.error = error === undefined ? '' : String(error);
   canvas.dataset.refine = refine ? refine.state : '';
+}
+
+// A refinement step the server did not send (not a tenth better than the frame on show): how far
+// it got, under the line; or, once refinement ended there, the line's new state.
+function showRefineNote(msg) {
+  const r = msg.refine;
+  if (r.state !== 'converging') return showRefine(r, msg.shown_error_estimate);
+  const step = r.stage === 'reference' ? `reference pass ${r.pass}, ${r.spp} spp` : `quality ${r.quality}`;
+  const e = msg.error_estimate === undefined ? '' : ` ≈ ${(100 * msg.error_estimate).toPrecision(2)} %`;
+  $('refine-next').textContent = `next: ${step}${e}`;
 }
 
 function connect() {
@@ -163,7 +174,7 @@ function connect() {
       const msg = JSON.parse(event.data);
       if (msg.type === 'error') $('status').textContent = 'error: ' + msg.error;
       else if (msg.type === 'frame') state.header = msg;
-      else if (msg.type === 'refine') showRefine(msg.refine, msg.error_estimate);  // ended unsent
+      else if (msg.type === 'refine') showRefineNote(msg);
       return;
     }
     const header = state.header;

@@ -34,7 +34,9 @@ const launch = () => chromium.launch({
 });
 
 test('the page streams frames, orbits on drag and bakes', { timeout: 240000 }, async () => {
-  const { proc, url } = await startDaemon();
+  // Without reference passes: a still view's passes would share the 2 cores with the bake timed
+  // here (refinement has its own test below).
+  const { proc, url } = await startDaemon(['--refine-max-passes', '0']);
   const browser = await launch();
   try {
     const registry = (await (await fetch(new URL('/api/pipelines', url))).json()).pipelines;
@@ -190,10 +192,16 @@ test('a still view shows its estimated error converging', { timeout: 180000 }, a
     // The overlay's line, as the user reads it, each time it changes.
     const seen = [];
     await page.exposeFunction('recordRefine', (text) => seen.push(text));
+    const next = [];  // the line under it: passes not shown yet
+    await page.exposeFunction('recordNext', (text) => next.push(text));
     await page.evaluate(() => {
-      const line = document.getElementById('refine');
-      new MutationObserver(() => window.recordRefine(line.textContent))
-        .observe(line, { childList: true, characterData: true, subtree: true });
+      const watch = (id, record) => {
+        const line = document.getElementById(id);
+        new MutationObserver(() => record(line.textContent))
+          .observe(line, { childList: true, characterData: true, subtree: true });
+      };
+      watch('refine', window.recordRefine);
+      watch('refine-next', window.recordNext);
     });
     const percent = (t) => { const m = /error ≈ ([\d.]+) %/.exec(t); return m ? Number(m[1]) : null; };
     const errors = () => seen.map(percent).filter((e) => e !== null);
@@ -204,11 +212,15 @@ test('a still view shows its estimated error converging', { timeout: 180000 }, a
       await new Promise((ok) => setTimeout(ok, 100));
     }
     const e = errors();
-    console.log(`refinement in the page after ${((Date.now() - start) / 1000).toFixed(1)} s: ${JSON.stringify(seen)}`);
+    console.log(`refinement in the page after ${((Date.now() - start) / 1000).toFixed(1)} s: ${JSON.stringify(seen)}; ` +
+                `${next.length} passes not shown, the first ${JSON.stringify(next.slice(0, 2))}`);
     assert.ok(e.length >= 2, `the page showed an error estimate that changed: ${JSON.stringify(seen)}`);
     for (let i = 1; i < e.length; ++i) assert.ok(e[i] < e[i - 1], `each shown error is lower: ${e}`);
     assert.ok(seen.some((t) => /error ≈ [\d.]+ % · (converging \(reference pass \d+, \d+ spp\)|converged)/.test(t)),
               `it says it is converging, with the pass and samples: ${JSON.stringify(seen)}`);
+    // Before the first pass was shown, the passes that were not said how far they got.
+    assert.ok(next.some((t) => /^next: reference pass \d+, \d+ spp ≈ [\d.]+ %$/.test(t)),
+              `the passes not shown yet: ${JSON.stringify(next.slice(0, 5))}`);
     const out = process.env.OUT_DIR || '.';
     mkdirSync(out, { recursive: true });
     await page.screenshot({ path: `${out}/browser-client-refine.png` });
