@@ -48,7 +48,9 @@ struct ApiOptions {
   int max_image = 2048;              // pixels per side for a render request
   size_t max_message_bytes = 64 << 20;  // largest WebSocket message
   int max_sessions = 16;                // live WebSocket sessions at once
-  int idle_refine_ms = 200;             // a still view is re-rendered at full size after this
+  int idle_refine_ms = 200;             // a still view is refined after this (server/refine.hpp)
+  double refine_pass_s = 1.0;           // what one reference pass of a still view aims to take
+  int refine_max_passes = 64;           // reference passes of a still view, at most
   double session_idle_s = 120;          // a live session that sends nothing for this long is closed
   double max_request_mb = 2048;      // estimated host + device memory one render or bake may take
   double max_render_s = 120;         // estimated (and enforced) seconds one render may take

@@ -127,7 +127,7 @@ void WsSession::read_hello(nlohmann::json msg) {
       spec = Api::read_render_spec(m, msg, self->options_, self->api_.scenes());
       m.finish();
       Api::check_cost(self->options_, spec->pipeline, *spec->scene, spec->terms, spec->settings,
-                      false);
+                      false, spec->max_error);
     } catch (const ValidationError& e) {
       spec.reset();
       error = e.what();
@@ -163,9 +163,21 @@ void WsSession::apply_hello(Api::RenderSpec spec) {
   terms_ = spec.terms;
   format_ = spec.format == "json" ? "jpg" : spec.format;
   settings_ = spec.settings;
+  max_error_ = spec.max_error;
+  refine_floor_ = spec.refine_floor;
+  cancel_unsent("a new hello");  // it renders what the session no longer shows
   dirty_ = true;
   interactive_ = false;
+  last_change_ = std::chrono::steady_clock::now();
   maybe_render();
+}
+
+// The frame in flight, unless it was sent (then only its ack frees the slot): its render stops
+// at its next progress check, and its result is dropped.
+void WsSession::cancel_unsent(const std::string& why) {
+  if (!in_flight_ || awaiting_ack_) return;
+  if (cancel_) cancel_->cancel(why);
+  in_flight_ = 0;
 }
 
 void WsSession::send_error(const std::string& error, const std::string& field) {
@@ -199,6 +211,7 @@ void WsSession::handle(const std::string& text) {
     dirty_ = true;
     interactive_ = true;
     last_change_ = std::chrono::steady_clock::now();
+    if (frame_step_) cancel_unsent("the camera moved");  // a still frame: refining a stale view
   } else if (type == "lights") {
     if (!scene_) throw ValidationError("type", "send hello first");
     long long rev =
@@ -208,12 +221,13 @@ void WsSession::handle(const std::string& text) {
     std::vector<Light> lights = parse_lights(msg["lights"], "lights");
     Scene lit = *scene_;  // the cost depends on the number of lights (the mesh is shared)
     lit.lights = lights;
-    Api::check_cost(options_, pipeline_, lit, terms_, settings_, false);
+    Api::check_cost(options_, pipeline_, lit, terms_, settings_, false, max_error_);
     lights_ = std::move(lights);
     light_revision_ = rev;
     dirty_ = true;
     interactive_ = true;
     last_change_ = std::chrono::steady_clock::now();
+    if (frame_step_) cancel_unsent("the lights changed");
   } else if (type == "ack") {
     long long frame = m.integer("frame", std::nullopt, {0, 2e9});
     m.finish();
@@ -250,26 +264,61 @@ void WsSession::schedule_refine() {
   });
 }
 
+// The next frame, if the slot is free: the newest pose (reduced while the user moves), else the
+// still view's next refinement step.
 void WsSession::maybe_render() {
-  if (!dirty_ || in_flight_ || closed_ || !scene_) return;
-  dirty_ = false;
+  if (in_flight_ || closed_ || !scene_) return;
+  if (dirty_) {
+    dirty_ = false;
+    if (interactive_) return start_frame(std::nullopt);
+    Scene view = *scene_;  // the mesh and density are shared; the refinement weighs costs on it
+    view.camera = camera_;
+    view.lights = lights_;
+    RefineOptions o{.floor = refine_floor_,
+                    .max_passes = options_.refine_max_passes,
+                    .pass_seconds = options_.refine_pass_s,
+                    .max_render_s = options_.max_render_s,
+                    .max_request_mb = options_.max_request_mb,
+                    .step_max_s = 10 * options_.refine_pass_s};
+    try {
+      refine_ = Refinement(view, pipeline_, terms_, settings_, o);
+    } catch (const std::exception& e) {  // validated by the hello: not expected
+      spdlog::warn("event=refine_failed error=\"{}\"", e.what());
+      refine_ = Refinement();
+    }
+    return start_frame(
+        refine_.next().value_or(RefineStep{RefineStep::Stage::Full, pipeline_, terms_, settings_}));
+  }
+  if (interactive_) return;
+  if (auto step = refine_.next()) start_frame(std::move(step));
+}
+
+void WsSession::start_frame(std::optional<RefineStep> step) {
   // Everything the frame needs, taken now: later messages cannot change it (latest wins at the
   // start of each frame, never in the middle). The scene itself is shared, not copied.
   FrameSpec f;
   f.scene = scene_;
   f.camera = camera_;
   f.lights = lights_;
-  bool reduced = interactive_;
+  bool reduced = !step;
   if (reduced) {  // cheaper while the user interacts
     f.width = std::max(1, scene_->width / 2);
     f.height = std::max(1, scene_->height / 2);
   }
-  f.pipeline = pipeline_;
-  f.terms = terms_;
-  f.settings = settings_;
+  if (!step || step->stage == RefineStep::Stage::Full) {  // the session's own frames
+    f.pipeline = pipeline_;
+    f.terms = terms_;
+    f.settings = settings_;
+    f.max_error = max_error_;
+  } else {
+    f.pipeline = step->pipeline;
+    f.terms = step->terms;
+    f.settings = step->settings;
+  }
   f.scene_load_ms = std::exchange(scene_load_ms_, 0);
   f.max_seconds = options_.max_render_s;
   last_frame_reduced_ = reduced;
+  frame_step_ = std::move(step);
   long long frame = next_frame_++;
   in_flight_ = frame;
   frame_camera_revision_ = camera_revision_;
@@ -292,18 +341,40 @@ void WsSession::maybe_render() {
 }
 
 void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
-  if (closed_ || frame != in_flight_) return;  // the client left meanwhile: nothing to send
+  if (closed_ || frame != in_flight_) return;  // the client left or moved meanwhile: not sent
   if (!o.result) {
     in_flight_ = 0;  // no frame to ack
+    if (frame_step_) refine_.stop();
     nlohmann::json e = {{"type", "error"}, {"error", o.error}, {"frame", frame}};
     if (!o.field.empty()) e["field"] = o.field;
     send(e.dump(), false);
     return;
   }
-  // Encoded on the worker pool, then sent from this strand.
+  nlohmann::json extra = nlohmann::json::object();
+  if (frame_step_) {
+    // A reference pass becomes the accumulation of the passes so far (on this strand: a few ms).
+    Refinement::Outcome out = refine_.take(*frame_step_, *o.result);
+    extra["refine"] = refine_.describe(*frame_step_, out.state);
+    if (!out.send) {  // not better by a tenth: the next step starts at once, nothing to ack
+      in_flight_ = 0;
+      // Said, without the image, so that a client can show how far the steps not shown got.
+      nlohmann::json note = {{"type", "refine"}, {"refine", extra["refine"]}};
+      if (out.estimate) note["error_estimate"] = *out.estimate;
+      if (auto e = refine_.last_sent()) note["shown_error_estimate"] = *e;
+      send(note.dump(), false);
+      return maybe_render();
+    }
+  }
+  send_frame(frame, reduced, std::move(o), std::move(extra));
+}
+
+// Encoded on the worker pool, then sent from this strand. `extra`: header fields beyond the
+// render's own.
+void WsSession::send_frame(long long frame, bool reduced, RenderOutcome o, nlohmann::json extra) {
   boost::asio::post(
       workers_, [self = shared_from_this(), frame, reduced, o = std::move(o), format = format_,
-                 cam_rev = frame_camera_revision_, light_rev = frame_light_revision_]() mutable {
+                 extra = std::move(extra), cam_rev = frame_camera_revision_,
+                 light_rev = frame_light_revision_]() mutable {
         RenderResult& r = *o.result;
         nlohmann::json timings = nlohmann::json::object();
         for (const auto& t : r.timings) timings[t.stage] = t.ms;
@@ -322,6 +393,8 @@ void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
                     {"height", r.image.height},
                     {"format", format},
                     {"reduced", reduced}};
+          if (r.error_estimate) header["error_estimate"] = *r.error_estimate;
+          header.update(extra);
           bytes = encode_image(r.image, format);
         } catch (const std::exception& e) {
           header = {{"type", "error"}, {"error", e.what()}, {"frame", frame}};

@@ -2,7 +2,8 @@
 // a JSON frame header followed by the encoded frame as a binary message.
 //
 //   {"type": "hello", "scene_name": "bunny" | "scene": {...}, "pipeline": "surface",
-//    "terms": "...", "format": "jpg" | "png", "settings": {...}}
+//    "terms": "...", "format": "jpg" | "png", "settings": {...},
+//    "quality": {"max_error": E, "refine_floor": F}}
 //   {"type": "camera", "position": [..], "target": [..], "up": [..], "fov_deg": 40, "revision": n}
 //   {"type": "lights", "lights": [...], "revision": n}
 //   {"type": "ack", "frame": id}
@@ -11,8 +12,15 @@
 // Latest wins: camera and light messages only replace the session's state; a frame renders the
 // newest state when it starts, so stale poses are never rendered. At most one frame is in flight:
 // from the moment it is queued until the client acks it, and an ack counts only for that frame.
-// While poses keep coming frames are rendered at half size; after ~200 ms without a change a
-// full-size frame refines the still view (header "reduced": false). Each session has at most one
+// While poses keep coming frames are rendered at half size; after ~200 ms without a change (and
+// after a hello) the still view is refined (server/refine.hpp): the full-size frame (header
+// "reduced": false), the pipeline's higher qualities, then accumulated reference passes, each
+// refined frame's header with "error_estimate" and "refine": {"stage", "state", ...}, sent only
+// when its estimate dropped by a tenth, until it is under refine_floor or the passes run out. A
+// refinement step whose result is not sent frees the slot at once (nothing to ack) and is told
+// as {"type": "refine", "refine", "error_estimate", "shown_error_estimate"}. A camera,
+// lights or hello message cancels a still frame not yet sent (its render stops at its next
+// progress check; the new pose's job queues behind it). Each session otherwise has at most one
 // job on the render thread's FIFO queue, so sessions take turns. The render thread posts the
 // result here; it is encoded on the worker pool and sent from this session's strand.
 //
@@ -31,6 +39,7 @@
 
 #include "scene/scene.hpp"
 #include "server/api.hpp"
+#include "server/refine.hpp"
 
 namespace scatter::server {
 
@@ -52,7 +61,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void read_hello(nlohmann::json msg);
   void apply_hello(Api::RenderSpec spec);
   void maybe_render();
+  void start_frame(std::optional<RefineStep> step);
   void on_rendered(long long frame, bool reduced, RenderOutcome outcome);
+  void send_frame(long long frame, bool reduced, RenderOutcome outcome, nlohmann::json extra);
+  void cancel_unsent(const std::string& why);
   void send(std::string message, bool binary);
   void do_write();
   void send_error(const std::string& error, const std::string& field);
@@ -77,16 +89,20 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   std::vector<Light> lights_;
   std::string pipeline_ = "surface", terms_, format_ = "jpg";
   Settings settings_;
+  std::optional<double> max_error_;  // the hello's quality.max_error, for the session's frames
+  double refine_floor_ = 0.01;       // the hello's quality.refine_floor
   long long camera_revision_ = 0, light_revision_ = 0;
   bool dirty_ = false, closed_ = false;
   // The frame in flight: queued, rendering, or sent and not yet acked (0: none).
   long long in_flight_ = 0;
   long long frame_camera_revision_ = 0, frame_light_revision_ = 0;  // the state it renders
   bool awaiting_ack_ = false;
-  std::shared_ptr<CancelToken> cancel_;  // the frame in flight's
+  std::shared_ptr<CancelToken> cancel_;   // the frame in flight's
+  std::optional<RefineStep> frame_step_;  // the frame in flight's refinement step (none: reduced)
   // While the user moves the camera or lights, frames render at half size; once the view has
-  // been still for idle_refine_ms, one full-size frame follows.
+  // been still for idle_refine_ms, it is refined (server/refine.hpp): the full-size frame first.
   bool interactive_ = false, last_frame_reduced_ = false;
+  Refinement refine_;
   std::chrono::steady_clock::time_point last_change_, last_message_;
   boost::asio::steady_timer refine_timer_, idle_timer_;
   long long next_frame_ = 1;

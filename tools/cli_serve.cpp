@@ -95,6 +95,14 @@ Handler add_serve_command(CLI::App& app) {
                   "A live session that sends nothing for this long is closed")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 1e6));
+  cmd->add_option("--refine-pass-s", o->server.api.refine_pass_s,
+                  "What one reference pass of a still live view aims to take")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 600.0));
+  cmd->add_option("--refine-max-passes", o->server.api.refine_max_passes,
+                  "Reference passes that refine a still live view, at most (0: none)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100000));
   cmd->add_option("--max-queue", o->server.max_queue,
                   "REST renders that may wait for the render thread")
       ->capture_default_str()

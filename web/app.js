@@ -129,6 +129,35 @@ async function bake() {
   }
 }
 
+// A still view is refined (docs/API.md, "Refinement"): each frame may carry its estimated error
+// (relative RMSE against the reference) and how far refining got; this says both in a line.
+function refineText(refine, error) {
+  const e = error === undefined ? '' : `error ≈ ${(100 * error).toPrecision(2)} %`;
+  if (!refine) return e;
+  if (refine.state === 'converged') return `${e} · converged (under ${100 * refine.floor} %)`;
+  if (refine.state === 'done') return e ? `${e} · refined` : '';
+  const step = refine.stage === 'reference' ? `reference pass ${refine.pass}, ${refine.spp} spp`
+    : refine.stage === 'quality' ? `quality ${refine.quality}` : 'full size';
+  return `${e ? e + ' · ' : ''}converging (${step})`;
+}
+
+function showRefine(refine, error) {
+  $('refine').textContent = refineText(refine, error);
+  $('refine-next').textContent = '';
+  canvas.dataset.error = error === undefined ? '' : String(error);
+  canvas.dataset.refine = refine ? refine.state : '';
+}
+
+// A refinement step the server did not send (not a tenth better than the frame on show): how far
+// it got, under the line; or, once refinement ended there, the line's new state.
+function showRefineNote(msg) {
+  const r = msg.refine;
+  if (r.state !== 'converging') return showRefine(r, msg.shown_error_estimate);
+  const step = r.stage === 'reference' ? `reference pass ${r.pass}, ${r.spp} spp` : `quality ${r.quality}`;
+  const e = msg.error_estimate === undefined ? '' : ` ≈ ${(100 * msg.error_estimate).toPrecision(2)} %`;
+  $('refine-next').textContent = `next: ${step}${e}`;
+}
+
 function connect() {
   const token = new URLSearchParams(location.search).get('token');
   const url = `ws://${location.host}/api/ws${token ? '?token=' + encodeURIComponent(token) : ''}`;
@@ -145,6 +174,7 @@ function connect() {
       const msg = JSON.parse(event.data);
       if (msg.type === 'error') $('status').textContent = 'error: ' + msg.error;
       else if (msg.type === 'frame') state.header = msg;
+      else if (msg.type === 'refine') showRefineNote(msg);
       return;
     }
     const header = state.header;
@@ -158,6 +188,7 @@ function connect() {
     $('rtt').textContent = (performance.now() - state.sentAt).toFixed(0);
     $('stages').textContent = header ? `${header.pipeline}: ` + Object.entries(header.timings_ms)
       .map(([k, v]) => `${k} ${v.toFixed(1)}`).join(' · ') + ' ms' : '';
+    if (header) showRefine(header.refine, header.error_estimate);
     $('status').textContent = 'connected';
     canvas.dataset.frames = String(state.frames);
     canvas.dataset.revision = header ? String(header.camera_revision) : '0';

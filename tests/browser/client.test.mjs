@@ -3,7 +3,8 @@
 // (GET /api/pipelines), waits for a frame, drags to orbit and sees the view change, bakes the
 // single pipeline's samples and watches the progress bar reach 100 %, renders with them, checks
 // the terms menu of a pipeline with several terms and what the hello sends, saves a screenshot,
-// and shows the page's error while /api/pipelines fails. Run by CTest: node --test
+// and shows the page's error while /api/pipelines fails; a still view of the sphere by thickness
+// shows its estimated error falling as the server refines it. Run by CTest: node --test
 // client.test.mjs (SCATTERD, OUT_DIR set).
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -11,11 +12,11 @@ import { spawn } from 'node:child_process';
 import { mkdirSync, rmSync } from 'node:fs';
 import { chromium } from 'playwright-core';
 
-function startDaemon() {
+function startDaemon(args = []) {
   return new Promise((resolve, reject) => {
     const cache = `${process.env.OUT_DIR || '.'}/browser-bake-cache`;
     rmSync(cache, { recursive: true, force: true });
-    const proc = spawn(process.env.SCATTERD, ['serve', '--port', '0', '--cache-dir', cache],
+    const proc = spawn(process.env.SCATTERD, ['serve', '--port', '0', '--cache-dir', cache, ...args],
                        { stdio: ['ignore', 'pipe', 'pipe'] });
     const timer = setTimeout(() => reject(new Error('scatterd did not start')), 20000);
     proc.stdout.on('data', (d) => {
@@ -26,13 +27,17 @@ function startDaemon() {
   });
 }
 
+const launch = () => chromium.launch({
+  executablePath: '/usr/bin/chromium',
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
+         '--disable-component-update'],
+});
+
 test('the page streams frames, orbits on drag and bakes', { timeout: 240000 }, async () => {
-  const { proc, url } = await startDaemon();
-  const browser = await chromium.launch({
-    executablePath: '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-           '--disable-component-update'],
-  });
+  // Without reference passes: a still view's passes would share the 2 cores with the bake timed
+  // here (refinement has its own test below).
+  const { proc, url } = await startDaemon(['--refine-max-passes', '0']);
+  const browser = await launch();
   try {
     const registry = (await (await fetch(new URL('/api/pipelines', url))).json()).pipelines;
     const info = (name) => registry.find((p) => p.name === name);
@@ -161,6 +166,73 @@ test('the page streams frames, orbits on drag and bakes', { timeout: 240000 }, a
     await failing.waitForSelector('#error', { state: 'hidden', timeout: 10000 });
     assert.equal(await failing.inputValue('#pipeline'), 'surface');
     await failing.close();
+  } finally {
+    await browser.close();
+    proc.kill('SIGTERM');
+  }
+});
+
+// Still, the view is refined: thickness's frames (no estimate), then the reference's passes, whose
+// estimated error the overlay shows, falling, until it is under the floor (1 %) or the passes end.
+test('a still view shows its estimated error converging', { timeout: 180000 }, async () => {
+  const { proc, url } = await startDaemon(['--refine-pass-s', '0.5', '--refine-max-passes', '40']);
+  const browser = await launch();
+  try {
+    const page = await browser.newPage({ viewport: { width: 900, height: 600 } });
+    await page.goto(url);
+    await page.waitForFunction(() => Number(document.getElementById('view').dataset.frames || 0) >= 1,
+                               null, { timeout: 60000 });
+    await page.selectOption('#scene', 'sphere');
+    await page.selectOption('#pipeline', 'thickness');
+    // Zoomed out (the orbit's radius 3.6 x e^1.2 = 12): the sphere covers a tenth of the pixels
+    // it did, and the reference's passes converge that much sooner.
+    const box = await page.locator('#view').boundingBox();
+    await page.mouse.move(box.x + 250, box.y + 250);
+    await page.mouse.wheel(0, 1200);
+    // The overlay's line, as the user reads it, each time it changes.
+    const seen = [];
+    await page.exposeFunction('recordRefine', (text) => seen.push(text));
+    const next = [];  // the line under it: passes not shown yet
+    await page.exposeFunction('recordNext', (text) => next.push(text));
+    await page.evaluate(() => {
+      const watch = (id, record) => {
+        const line = document.getElementById(id);
+        new MutationObserver(() => record(line.textContent))
+          .observe(line, { childList: true, characterData: true, subtree: true });
+      };
+      watch('refine', window.recordRefine);
+      watch('refine-next', window.recordNext);
+    });
+    const percent = (t) => { const m = /error ≈ ([\d.]+) %/.exec(t); return m ? Number(m[1]) : null; };
+    const errors = () => seen.map(percent).filter((e) => e !== null);
+    const start = Date.now();
+    while (Date.now() - start < 150000) {
+      const last = seen.at(-1) || '';
+      if (errors().length >= 3 || /converged|refined/.test(last)) break;
+      await new Promise((ok) => setTimeout(ok, 100));
+    }
+    const e = errors();
+    console.log(`refinement in the page after ${((Date.now() - start) / 1000).toFixed(1)} s: ${JSON.stringify(seen)}; ` +
+                `${next.length} passes not shown, the first ${JSON.stringify(next.slice(0, 2))}`);
+    assert.ok(e.length >= 2, `the page showed an error estimate that changed: ${JSON.stringify(seen)}`);
+    for (let i = 1; i < e.length; ++i) assert.ok(e[i] < e[i - 1], `each shown error is lower: ${e}`);
+    assert.ok(seen.some((t) => /error ≈ [\d.]+ % · (converging \(reference pass \d+, \d+ spp\)|converged)/.test(t)),
+              `it says it is converging, with the pass and samples: ${JSON.stringify(seen)}`);
+    // Before the first pass was shown, the passes that were not said how far they got.
+    assert.ok(next.some((t) => /^next: reference pass \d+, \d+ spp ≈ [\d.]+ %$/.test(t)),
+              `the passes not shown yet: ${JSON.stringify(next.slice(0, 5))}`);
+    const out = process.env.OUT_DIR || '.';
+    mkdirSync(out, { recursive: true });
+    await page.screenshot({ path: `${out}/browser-client-refine.png` });
+    // Moving starts over: the reduced and thickness frames carry no estimate, and the line says so.
+    await page.mouse.move(box.x + 250, box.y + 250);
+    await page.mouse.down();
+    await page.mouse.move(box.x + 300, box.y + 250, { steps: 4 });
+    await page.mouse.up();
+    await page.waitForFunction(() => Number(document.getElementById('view').dataset.revision) > 0 &&
+                                     !/error/.test(document.getElementById('refine').textContent),
+                               null, { timeout: 60000 });
+    await page.close();
   } finally {
     await browser.close();
     proc.kill('SIGTERM');

@@ -146,6 +146,8 @@ void LiveSession::on_text(const std::string& text) {
     if (header_) result_.errors.add("protocol", "a frame header while another awaited its image");
     header_ = std::move(msg);
     header_at_ = Clock::now();
+  } else if (msg["type"] == "refine") {
+    // A still view's refinement step that was not sent (docs/API.md): no image follows.
   } else if (msg["type"] == "error") {
     std::string what = msg.value("error", std::string("(no message)"));
     result_.errors.add("server", msg.contains("frame") ? "frame failed: " + what : what);

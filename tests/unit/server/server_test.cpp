@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <boost/beast.hpp>
+#include <chrono>
+#include <iostream>
 #include <thread>
 
 #include "../test_util.hpp"
@@ -221,6 +223,111 @@ TEST_F(ServerTest, AClientVanishingMidFrameCostsNothing) {
   EXPECT_EQ(d.next_frame(image)["type"], "frame");
   d.close();
   EXPECT_EQ(request(server_->port(), http::verb::get, "/api/health").result_int(), 200);
+}
+
+// A still view refines itself: the full frame, thickness's "high", then reference passes of the
+// single term whose accumulated error_estimate falls, each sent frame a tenth under the one before,
+// until the floor (or the pass limit); a pose then cancels the refinement and renders reduced.
+TEST_F(ServerTest, AStillViewConvergesWithItsErrorEstimate) {
+  TearDown();
+  ServerOptions o;
+  o.port = 0;
+  o.api.scenes_dir = test::source_path("scenes");
+  o.api.refine_pass_s = 0.1;
+  o.api.refine_max_passes = 60;
+  server_ = std::make_unique<Server>(o);
+  thread_ = std::thread([this] { server_->run(false); });
+  WsClient c(server_->port());
+  nlohmann::json h = hello();
+  h["pipeline"] = "thickness";
+  h["quality"] = {{"refine_floor", 0.07}};
+  c.send(h);
+  std::vector<nlohmann::json> headers;
+  std::string image;
+  int notes = 0;  // steps not sent: each told by a "refine" message
+  auto start = std::chrono::steady_clock::now();
+  for (;;) {
+    nlohmann::json f = c.next_frame(image);
+    if (f["type"] == "refine") {
+      ASSERT_EQ(f["refine"]["stage"], "reference") << f.dump();
+      double shown = f.value("shown_error_estimate", 0.1);  // none: an assumed 10 %
+      EXPECT_GT(f["error_estimate"].get<double>(), 0.9 * shown) << f.dump();
+      ++notes;
+      if (f["refine"]["state"] == "converging") continue;
+      headers.push_back(f);  // ended without a frame
+      break;
+    }
+    ASSERT_EQ(f["type"], "frame") << f.dump();
+    ASSERT_TRUE(f.contains("refine")) << f.dump();
+    EXPECT_EQ(f["reduced"], false);
+    EXPECT_EQ(f["width"], 64);
+    headers.push_back(f);
+    c.send({{"type", "ack"}, {"frame", f["frame"]}});
+    if (f["refine"]["state"] != "converging") break;
+    ASSERT_LT(headers.size(), 65u);
+  }
+  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_GE(headers.size(), 4u);
+  EXPECT_EQ(headers[0]["refine"]["stage"], "full");
+  EXPECT_EQ(headers[1]["refine"]["stage"], "quality");
+  EXPECT_EQ(headers[1]["refine"]["quality"], "high");
+  std::vector<double> errors;
+  std::string line;
+  for (size_t i = 2; i < headers.size(); ++i) {
+    const nlohmann::json& r = headers[i]["refine"];
+    if (headers[i]["type"] == "frame") {
+      EXPECT_EQ(r["stage"], "reference");
+      EXPECT_EQ(headers[i]["pipeline"], "reference");
+      line += " pass " + r["pass"].dump() + " " + r["spp"].dump() + " spp " +
+              headers[i]["error_estimate"].dump() + ";";
+    }
+    if (headers[i]["type"] == "frame") errors.push_back(headers[i]["error_estimate"]);
+  }
+  std::cout << "refinement: " << seconds << " s, " << notes << " passes not sent;" << line << "\n";
+  EXPECT_GT(notes, 0);
+  ASSERT_GE(errors.size(), 2u);
+  EXPECT_LE(errors[0],
+            0.09);  // over thickness's frames (no estimate): an assumed 10 %, less a tenth
+  for (size_t i = 1; i + 1 < errors.size(); ++i) EXPECT_LE(errors[i], 0.9 * errors[i - 1]);
+  EXPECT_LT(errors.back(), errors[errors.size() - 2]);
+  const nlohmann::json& last = headers.back()["refine"];
+  if (last["state"] == "converged")
+    EXPECT_LE(errors.back(), 0.07);
+  else
+    EXPECT_EQ(headers.back()["refine"]["pass"], 60);  // the passes ran out
+  // The next frame, past the notes of steps not sent.
+  auto next_frame = [&] {
+    nlohmann::json f = c.next_frame(image);
+    while (f["type"] == "refine") f = c.next_frame(image);
+    return f;
+  };
+  // A pose while nothing is in flight: the next frame is the reduced pose; once still, the
+  // refinement starts over with the full frame.
+  c.send(pose(1));
+  nlohmann::json f = next_frame();
+  ASSERT_EQ(f["type"], "frame") << f.dump();
+  EXPECT_EQ(f["reduced"], true);
+  EXPECT_EQ(f["camera_revision"], 1);
+  c.send({{"type", "ack"}, {"frame", f["frame"]}});
+  f = next_frame();
+  EXPECT_EQ(f["refine"]["stage"], "full");
+  EXPECT_EQ(f["camera_revision"], 1);
+  // A pose while a reference pass renders (high is sent first; the first passes are not sent):
+  // the pass is cancelled, and the pose's reduced frame comes next.
+  c.send({{"type", "ack"}, {"frame", f["frame"]}});
+  f = next_frame();
+  ASSERT_EQ(f["refine"]["stage"], "quality") << f.dump();
+  c.send({{"type", "ack"}, {"frame", f["frame"]}});
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  c.send(pose(2));
+  f = next_frame();
+  ASSERT_EQ(f["type"], "frame") << f.dump();
+  EXPECT_EQ(f["camera_revision"], 2);
+  EXPECT_FALSE(f.contains("refine"));
+  EXPECT_EQ(f["reduced"], true);
+  std::string metrics = request(server_->port(), http::verb::get, "/metrics").body();
+  EXPECT_EQ(metrics.find("\nscatter_renders_cancelled_total 0\n"), std::string::npos);
+  c.close();
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 
 #include "../../test_util.hpp"
 #include "../axis_box.hpp"
+#include "pipelines/accumulate.hpp"
+#include "pipelines/metrics.hpp"
 #include "protocol/json_reader.hpp"
 
 namespace scatter {
@@ -199,6 +201,30 @@ TEST(ReferencePipeline, SameSeedRepeats) {
   RenderResult c = render(s, Terms::Multiple, {{"spp", 8}, {"seed", 4}});
   EXPECT_EQ(a.image.rgb, b.image.rgb);
   EXPECT_NE(a.image.rgb, c.image.rgb);
+}
+
+// error_estimate is ||std_error|| / ||image||, and it predicts the real error: two renders with
+// other seeds differ by sqrt(2) times it (their difference has twice the variance), and passes
+// accumulated (pipelines/accumulate.hpp) estimate what one render of all their samples does.
+TEST(ReferencePipeline, TheEstimatedErrorIsTheStandardErrorsNormAndPredictsTheError) {
+  Scene s = small("sphere", 24, 16);
+  RenderResult a = render(s, Terms::Multiple, {{"spp", 24}, {"seed", 1}});
+  RenderResult b = render(s, Terms::Multiple, {{"spp", 24}, {"seed", 2}});
+  ASSERT_TRUE(a.error_estimate);
+  EXPECT_EQ(*a.error_estimate, relative_norm(*a.std_error, a.image));
+  std::vector<uint8_t> all(size_t(s.width) * s.height, 1);
+  double apart = relative_rmse(a.image, b.image, all);
+  EXPECT_NEAR(apart, std::sqrt(2.0) * *a.error_estimate, 0.2 * apart);
+  PassAccumulator passes;
+  for (int seed = 3; seed < 7; ++seed) {
+    RenderResult p = render(s, Terms::Multiple, {{"spp", 24}, {"seed", seed}});
+    passes.add(p.image, *p.std_error, 24);
+  }
+  RenderResult whole = render(s, Terms::Multiple, {{"spp", 96}, {"seed", 9}});
+  double combined = relative_norm(passes.std_error(), passes.mean());
+  EXPECT_NEAR(combined, *whole.error_estimate, 0.15 * *whole.error_estimate);
+  EXPECT_NEAR(combined, *a.error_estimate / 2, 0.2 * combined);  // 4x the samples
+  EXPECT_FALSE(render(s, Terms::Single).error_estimate);         // the marcher: exact
 }
 
 }  // namespace
