@@ -9,7 +9,10 @@
 //
 // terms: bit 0 adds light scattered once (NEE at the first vertex), bit 1 light scattered more
 // than once. Each launch adds `spp` samples per pixel to sum and sum_sq of their channel, from
-// which the host takes the mean and its standard error per channel.
+// which the host takes the mean and its standard error per channel. sum_sq holds the squares
+// times `sq_scale` (the inverse of the lights' largest power): a square in float32 overflows
+// past radiance 1.8e19 (a 1e12 light of colour 1e6) and underflows below 1e-19 (a 1e-12 light of
+// colour 1e-12), while radiance over power keeps to the geometry's range.
 
 // Light arriving at x and scattered into -d, for one channel: sum over the lights.
 float next_event(const Grid* g, __global const float* sigma_t, __global const float* majorant,
@@ -35,7 +38,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
                          __global const float* camera, int width, int height, int terms,
                          int spp, int first_sample, uint seed, int max_depth, float ior,
                          __global const float* bvh_bounds, __global const int* bvh_links,
-                         __global const float* bvh_tris, __global float* sum,
+                         __global const float* bvh_tris, float sq_scale, __global float* sum,
                          __global float* sum_sq) {
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
@@ -97,7 +100,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
       }
     }
     acc[ch] += value;
-    acc2[ch] += value * value;
+    acc2[ch] += (value * sq_scale) * value;
   }
   size_t i = 3 * ((size_t)y * width + x);
   for (int c = 0; c < 3; ++c) {

@@ -1,5 +1,6 @@
 #include "pipelines/reference/reference_pipeline.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/errors.hpp"
@@ -25,17 +26,28 @@ bool marches(const ReferenceSettings& s, Terms terms) {
 }
 
 // Mean and standard error of the mean from per-sample sums; sample s went to channel s mod 3, so
-// channel c has its own count.
+// channel c has its own count. sum_sq holds the squares times sq_scale.
 void finish_estimate(const std::vector<float>& sum, const std::vector<float>& sum_sq, int spp,
-                     Image& mean, Image& std_error) {
+                     double sq_scale, Image& mean, Image& std_error) {
   for (size_t i = 0; i < sum.size(); ++i) {
     int c = static_cast<int>(i % 3);
     double n = (spp - c + 2) / 3;  // samples s < spp with s % 3 == c
     double m = sum[i] / n;
-    double var = std::max(0.0, sum_sq[i] / n - m * m) * n / std::max(1.0, n - 1);
+    double var = std::max(0.0, sum_sq[i] / sq_scale / n - m * m) * n / std::max(1.0, n - 1);
     mean.rgb[i] = static_cast<float>(m);
     std_error.rgb[i] = static_cast<float>(std::sqrt(var / n));
   }
+}
+
+// The inverse of the largest power (intensity or irradiance times colour) of the lights: the
+// kernel keeps squared radiance in these units, which float32 holds for every power a scene may
+// give (kernels/reference/path.cl).
+double square_scale(const Scene& scene) {
+  double power = 0;
+  for (const Light& l : scene.lights)
+    power = std::max(
+        {power, l.intensity * l.color.x, l.intensity * l.color.y, l.intensity * l.color.z});
+  return power > 0 ? std::clamp(1 / power, 1e-30, 1e30) : 1;
 }
 
 }  // namespace
@@ -137,12 +149,13 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   // rounds of the three channels), up to 8x spp.
   const int per_pass = std::min(s.spp, 4);
   const int cap = request.max_error ? std::min(8 * s.spp, 1 << 20) : s.spp;
+  const double sq_scale = square_scale(scene);
   std::vector<float> host_sum(floats), host_sq(floats);
   result.std_error = Image(w, h);
   auto noise_now = [&](int spp) {
     queue.enqueueReadBuffer(sum, CL_TRUE, 0, floats * sizeof(float), host_sum.data());
     queue.enqueueReadBuffer(sum_sq, CL_TRUE, 0, floats * sizeof(float), host_sq.data());
-    finish_estimate(host_sum, host_sq, spp, result.image, *result.std_error);
+    finish_estimate(host_sum, host_sq, spp, sq_scale, result.image, *result.std_error);
     return relative_norm(*result.std_error, result.image);
   };
   int spp = 0, next_check = 12;
@@ -153,7 +166,7 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                   medium.bricks.brick, medium.bricks.bx, medium.bricks.by, medium.bricks.bz,
                   medium.sigma_s, medium.sigma_t, medium.majorant, lights, light_count, g, camera,
                   w, h, terms, n, done, s.seed, s.max_depth, ior, bvh_bounds, bvh_links, bvh_tris,
-                  sum, sum_sq);
+                  float(sq_scale), sum, sum_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     spp = done + n;
