@@ -1,15 +1,48 @@
 // Deterministic single-scatter ray marcher: per pixel, the view ray crosses the voxels exactly
 // (DDA); inside each voxel the in-scattering integral is summed over sub-steps of at most `step`
-// voxels, each weighted by the exact integral of the view transmittance over the sub-step; the
-// light's transmittance is the exact optical depth through the voxels. Converges as step -> 0.
+// voxels, each the exact integral of the view and light transmittances over the sub-step for a
+// light optical depth linear across it (march_segment); the light's optical depth is exact
+// through the voxels at the sub-steps' ends. Converges as step -> 0.
 //
 // With a dielectric boundary (ior != 1) the view ray is split at every surface crossing into its
 // reflected and refracted parts, weighted by Fresnel, and each part inside the medium is marched
 // up to the surface (a small stack, until the weight is negligible); light reaches a point inside
 // along a straight shadow ray weighted by the Fresnel transmittance of the crossings.
 
+// Light reaching p from light l, scattered into -d, before the medium's attenuation (*tau: the
+// optical depth towards the light).
+float unattenuated(const Grid* g, __global const float* sigma_t, __global const float* lights,
+                   int l, float g_phase, int ch, float3 p, float3 d, Bvh bvh, float ior,
+                   float* tau) {
+  float3 wl;
+  float dist;
+  float e = light_irradiance(load_light(lights, l), p, ch, &wl, &dist);
+  *tau = 0.0f;
+  if (e <= 0.0f) return 0.0f;
+  *tau = optical_depth(g, sigma_t, ch, p, wl, 0.0f, dist);
+  if (ior != 1.0f) e *= boundary_transmittance(bvh, ior, p, wl, dist);
+  return e * hg_phase(dot(wl, d), g_phase);
+}
+
+// The mean of exp(-f) over an interval on which f rises linearly from a to b:
+// (exp(-a) - exp(-b)) / (b - a), for either order and without overflow.
+float exp_mean(float a, float b) {
+  float x = fabs(b - a);
+  return exp(-fmin(a, b)) * (x > 1e-4f ? -expm1(-x) / x : 1.0f - 0.5f * x);
+}
+
+#define MAX_MARCH_LIGHTS 16
+// The sub-steps' ends on the voxel's faces are taken this fraction of a sub-step inside it: a
+// point on a face may round into the neighbour (the empty margin, for the medium's own faces),
+// whose light path misses the medium.
+#define FACE_INSET 1e-3f
+
 // Single-scattered radiance along o + t d, t in [t0, t1], for one channel; *tr_end receives the
-// view transmittance from t0 to t1.
+// view transmittance from t0 to t1. Over each sub-step [0, h] the optical depth to the eye grows
+// as st u and the one to each light is taken linear between its values at the sub-step's ends,
+// so the sub-step's integral of exp(-both) is exact for a linear light depth (a voxel's face):
+// a midpoint value of the light's transmittance is off by its curvature over st h, which in a
+// dense voxel (st h of 250) leaves 40% of the light out.
 float march_segment(const Grid* g, __global const float* sigma_s, __global const float* sigma_t,
                     __global const float* lights, int light_count, float g_phase, int ch,
                     float3 o, float3 d, float t0, float t1, float step, Bvh bvh, float ior,
@@ -20,32 +53,42 @@ float march_segment(const Grid* g, __global const float* sigma_s, __global const
   a0 = fmax(a0, t0);
   a1 = fmin(a1, t1);
   if (a1 <= a0) return 0.0f;
+  light_count = min(light_count, MAX_MARCH_LIGHTS);
   Dda s;
   dda_init(&s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), a0, a1);
   float tr = 1.0f, radiance = 0.0f, a, b;
+  float e0[MAX_MARCH_LIGHTS], tau0[MAX_MARCH_LIGHTS];
   int3 c;
   while (dda_next(&s, &a, &b, &c) && tr > 1e-7f) {
     int v = 3 * voxel_index(g, c.x, c.y, c.z) + ch;
     float st = sigma_t[v], ss = sigma_s[v];
-    if (st <= 0.0f) continue;
+    if (st <= 0.0f || b <= a) continue;  // a ray through a voxel's edge gives an empty segment
     int n = max(1, (int)ceil((b - a) / (step * g->voxel)));
     float h = (b - a) / n;
     float seg_tr = exp(-st * h);
-    // Integral of exp(-st u) over [0, h], stable for small st h.
-    float w = st * h > 1e-4f ? (1.0f - seg_tr) / st : h * (1.0f - 0.5f * st * h);
-    for (int k = 0; k < n; ++k) {
-      float3 p = o + d * (a + (k + 0.5f) * h);
+    for (int l = 0; l < light_count; ++l)
+      e0[l] = unattenuated(g, sigma_t, lights, l, g_phase, ch, o + d * (a + FACE_INSET * h), d,
+                           bvh, ior, &tau0[l]);
+    for (int k = 0; k < n && tr > 1e-7f; ++k) {
+      // The ends' offsets in the sub-step: [u0, u1] within [0, h].
+      float u0 = k == 0 ? FACE_INSET * h : 0.0f, u1 = k == n - 1 ? (1.0f - FACE_INSET) * h : h;
+      float3 p1 = o + d * (a + k * h + u1);
       float in_scatter = 0.0f;
       for (int l = 0; l < light_count; ++l) {
-        float3 wl;
-        float dist;
-        float e = light_irradiance(load_light(lights, l), p, ch, &wl, &dist);
-        if (e <= 0.0f) continue;
-        float tau = optical_depth(g, sigma_t, ch, p, wl, 0.0f, dist);
-        if (ior != 1.0f) e *= boundary_transmittance(bvh, ior, p, wl, dist);
-        in_scatter += e * exp(-tau) * hg_phase(dot(wl, d), g_phase);
+        float tau1;
+        float e1 = unattenuated(g, sigma_t, lights, l, g_phase, ch, p1, d, bvh, ior, &tau1);
+        if (e0[l] > 0.0f || e1 > 0.0f) {
+          // The light's depth, linear through the two ends, at the sub-step's start and its slope.
+          // (An optical depth is never negative: where the light's depth is far from linear, a
+          // blocker's edge within the sub-step, the extrapolation to the ends must not go below 0.)
+          float slope = (tau1 - tau0[l]) / (u1 - u0), start = tau0[l] - slope * u0;
+          in_scatter += 0.5f * (e0[l] + e1) *
+                        exp_mean(fmax(start, 0.0f), fmax(start + (st + slope) * h, 0.0f));
+        }
+        e0[l] = e1;
+        tau0[l] = tau1;
       }
-      radiance += tr * w * ss * in_scatter;
+      radiance += tr * h * ss * in_scatter;
       tr *= seg_tr;
     }
   }

@@ -123,6 +123,9 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   const int light_count = static_cast<int>(scene.lights.size());
   const float g = static_cast<float>(scene.medium.g);
   if (marches(s, request.terms)) {
+    // kernels/reference/single_march.cl keeps two floats per light for the sub-steps' ends.
+    if (scene.lights.size() > 16)
+      throw ValidationError("scene.lights", "the reference marcher takes at most 16 lights");
     cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, floats * sizeof(float));
     cl::Kernel k(cl.program(program("kernels/reference/single_march.cl")), "single_march");
     gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz, medium.sigma_s,
