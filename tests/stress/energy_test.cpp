@@ -32,14 +32,15 @@ constexpr double kWeights[] = {0.1012285362903763, 0.2223810344533745, 0.3137066
 nlohmann::json sphere(double tau_voxel, double albedo, double g) {
   const int voxels = 8;
   const double st = tau_voxel * voxels / 2;
-  return {{"mesh", {{"shape", "sphere"}, {"radius", 1}}},
-          {"medium", {{"sigma_s", albedo * st}, {"sigma_a", (1 - albedo) * st}, {"g", g}}},
-          // Light travels along -z: mu = 1 looks back at the lit side.
-          {"lights", nlohmann::json::array(
-                         {{{"type", "directional"}, {"direction", {0, 0, -1}}, {"irradiance", 2}}})},
-          {"image", {{"width", kSide}, {"height", kSide}}},
-          {"surface", {{"diffuse", 0}, {"specular", 0}}},  // no surface term on top
-          {"voxels", voxels}};
+  return {
+      {"mesh", {{"shape", "sphere"}, {"radius", 1}}},
+      {"medium", {{"sigma_s", albedo * st}, {"sigma_a", (1 - albedo) * st}, {"g", g}}},
+      // Light travels along -z: mu = 1 looks back at the lit side.
+      {"lights", nlohmann::json::array(
+                     {{{"type", "directional"}, {"direction", {0, 0, -1}}, {"irradiance", 2}}})},
+      {"image", {{"width", kSide}, {"height", kSide}}},
+      {"surface", {{"diffuse", 0}, {"specular", 0}}},  // no surface term on top
+      {"voxels", voxels}};
 }
 
 // The area the medium presents to a light along z: the columns of voxels that hold extinction
@@ -94,9 +95,9 @@ TEST_P(Energy, ScatteredPowerAtMostIncident) {
   auto pipeline = make_pipeline(GetParam(), test::shared_gpu());
   Settings settings;
   if (GetParam() == "reference") settings = {{"spp", 12}};
-  for (EnergyCase c : {EnergyCase{0.1, 1 - 1e-6, 0}, EnergyCase{1, 1 - 1e-6, 0},
-                       EnergyCase{10, 1 - 1e-6, 0}, EnergyCase{1, 1 - 1e-6, 0.5},
-                       EnergyCase{1, 0.5, 0}}) {
+  for (EnergyCase c :
+       {EnergyCase{0.1, 1 - 1e-6, 0}, EnergyCase{1, 1 - 1e-6, 0}, EnergyCase{10, 1 - 1e-6, 0},
+        EnergyCase{1, 1 - 1e-6, 0.5}, EnergyCase{1, 0.5, 0}}) {
     Scene scene = parse_scene(sphere(c.tau_voxel, c.albedo, c.g), dir);
     double incident = 2 * lit_area(scene);
     double p = scattered_power(*pipeline, scene, Terms::All, settings);

@@ -115,7 +115,8 @@ std::optional<Image> single_bound(const Scene& scene, bool isotropic_view) {
 }
 
 // Blinn-Phong as pipelines/surface shades it (shaders/surface): per light
-//   (kd / pi + ks (n + 8) / (8 pi) cos^n theta_h) E cos theta_i <= (kd / pi + ks (n + 8) / (8 pi)) E.
+//   (kd / pi + ks (n + 8) / (8 pi) cos^n theta_h) E cos theta_i <= (kd / pi + ks (n + 8) / (8 pi))
+//   E.
 std::optional<Image> surface_bound(const Scene& scene) {
   const SurfaceMaterial& s = scene.surface;
   const double brdf =

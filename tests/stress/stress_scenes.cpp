@@ -30,7 +30,9 @@ nlohmann::json mesh_json(const Params& p) {
   const double s = p.scale;
   if (p.shape == "sphere") return {{"shape", "sphere"}, {"radius", s}};
   if (p.shape == "torus")
-    return {{"shape", "torus"}, {"major_radius", 0.6 * s}, {"minor_radius", 0.25 * s},
+    return {{"shape", "torus"},
+            {"major_radius", 0.6 * s},
+            {"minor_radius", 0.25 * s},
             {"axis", {0.3, 1, 0.2}}};
   // slab: one voxel thick along z (voxels count along the longest side, 2 s).
   double z = p.shape == "slab" ? 2.0 / p.voxels : 2.0;
@@ -96,21 +98,26 @@ nlohmann::json light_json(const Params& p) {
                           {"intensity", p.power}};
   };
   const std::string& l = p.light;
-  if (l == "behind") return nlohmann::json::array({directional({0, 0, 1})});            // travels into the camera
-  if (l == "grazing") return nlohmann::json::array({directional({1, 0, 0})});           // along the faces z = +-1
-  if (l == "grazing_top") return nlohmann::json::array({directional({1, -1e-4, 0})});   // skims y = 1
-  if (l == "point_inside") return nlohmann::json::array({point(0.1, -0.2, 0.05)});      // in the medium
-  if (l == "point_surface") return nlohmann::json::array({point(0, 0, 1)});             // on the box's front face
-  if (l == "point_near") return nlohmann::json::array({point(0.2, 0.1, 1 + 1e-4)});     // just outside the front face
+  if (l == "behind")
+    return nlohmann::json::array({directional({0, 0, 1})});  // travels into the camera
+  if (l == "grazing")
+    return nlohmann::json::array({directional({1, 0, 0})});  // along the faces z = +-1
+  if (l == "grazing_top")
+    return nlohmann::json::array({directional({1, -1e-4, 0})});                     // skims y = 1
+  if (l == "point_inside") return nlohmann::json::array({point(0.1, -0.2, 0.05)});  // in the medium
+  if (l == "point_surface")
+    return nlohmann::json::array({point(0, 0, 1)});  // on the box's front face
+  if (l == "point_near")
+    return nlohmann::json::array({point(0.2, 0.1, 1 + 1e-4)});  // just outside the front face
   if (l == "point_far") return nlohmann::json::array({point(3, 4, 6)});
   if (l == "spot_inside")
     return nlohmann::json::array({{{"type", "spot"},
-             {"position", {0, 0, 0}},
-             {"direction", {0, 0, 1}},
-             {"color", c},
-             {"intensity", p.power},
-             {"inner_deg", 0},
-             {"outer_deg", 1e-3}}});
+                                   {"position", {0, 0, 0}},
+                                   {"direction", {0, 0, 1}},
+                                   {"color", c},
+                                   {"intensity", p.power},
+                                   {"inner_deg", 0},
+                                   {"outer_deg", 1e-3}}});
   if (l == "many") {  // the most lights a scene may hold, from all around
     nlohmann::json all = nlohmann::json::array();
     for (int k = 0; k < 16; ++k) {
@@ -162,8 +169,8 @@ Axes axes(Mode mode) {
   a.power = {0, 1e-12, 1e-6, 1, 1e6, 1e9};
   a.shapes = {"box", "sphere", "torus", "slab"};
   a.densities = {"const", "layers", "noise", "blocker", "shell"};
-  a.lights = {"front",      "behind",        "grazing",    "grazing_top", "point_inside",
-              "point_surface", "point_near", "point_far",  "spot_inside", "many"};
+  a.lights = {"front",         "behind",     "grazing",   "grazing_top", "point_inside",
+              "point_surface", "point_near", "point_far", "spot_inside", "many"};
   a.cameras = {"axis", "oblique", "inside"};
   if (mode == Mode::Long) {
     a.tau.insert(a.tau.end(), {1e-5, 1e-3, 0.1, 3, 30, 300});
@@ -281,9 +288,8 @@ std::vector<StressCase> stress_cases(Mode mode, const std::filesystem::path& dat
     p.light = "point_inside";
     p.ior = 2.5;
   });
-  for (const std::string& c : a.cameras) one("camera", "camera_" + c, [&](Params& p) {
-      p.camera = c;
-    });
+  for (const std::string& c : a.cameras)
+    one("camera", "camera_" + c, [&](Params& p) { p.camera = c; });
   for (double v : a.power) {
     one("intensity", "directional=" + num(v), [&](Params& p) { p.power = v; });
     one("intensity", "point_inside=" + num(v * 1e3), [&](Params& p) {

@@ -21,13 +21,13 @@ struct Params {
   double albedo = 0.8;     // sigma_s / sigma_t
   double g = 0.3;
   double ior = 1;
-  double scale = 1;                // the object's size and the camera distance scale by this
-  std::string shape = "box";       // box [-1, 1]^3, sphere r 1, torus, slab (one voxel thick)
-  std::string density = "const";   // const, layers, noise, blocker, shell (a one-voxel grid shell)
-  std::string light = "front";     // see light_json() in stress_scenes.cpp
-  double power = 1;                // directional irradiance, or point / spot intensity
-  double color = 1;                // the lights' colour, all channels
-  std::string camera = "axis";     // axis (+z), oblique, inside (in the medium)
+  double scale = 1;               // the object's size and the camera distance scale by this
+  std::string shape = "box";      // box [-1, 1]^3, sphere r 1, torus, slab (one voxel thick)
+  std::string density = "const";  // const, layers, noise, blocker, shell (a one-voxel grid shell)
+  std::string light = "front";    // see light_json() in stress_scenes.cpp
+  double power = 1;               // directional irradiance, or point / spot intensity
+  double color = 1;               // the lights' colour, all channels
+  std::string camera = "axis";    // axis (+z), oblique, inside (in the medium)
   int voxels = 8;
   int image = 16;
 };

@@ -165,13 +165,15 @@ TEST_P(Stress, ExtremeScenes) {
       continue;
     std::vector<std::string> failed = run(c, index, by_class[c.klass]);
     const std::string known = known_failure(GetParam(), c);
-    const std::string what = c.name + " (" + to_string(terms_for(pipeline_info(GetParam()), index)) + ")";
+    const std::string what =
+        c.name + " (" + to_string(terms_for(pipeline_info(GetParam()), index)) + ")";
     if (!known.empty()) {
       std::printf("known failure %s %s: %s\n", GetParam().c_str(), what.c_str(),
                   failed.empty() ? "passes now (remove it from known_failure)" : failed[0].c_str());
       continue;
     }
-    for (const std::string& f : failed) ADD_FAILURE() << what << ": " << f << "\n" << c.scene.dump();
+    for (const std::string& f : failed)
+      ADD_FAILURE() << what << ": " << f << "\n" << c.scene.dump();
   }
   for (const auto& [klass, t] : by_class) {
     std::printf("%-10s %-10s rendered %4d  bounded %4d  declined %3d  slowest %.2f s\n",
