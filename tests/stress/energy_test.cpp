@@ -91,7 +91,7 @@ INSTANTIATE_TEST_SUITE_P(AllOrders, Energy, ::testing::Values("reference", "psf"
 constexpr double kQuadrature = 0.1;
 
 TEST_P(Energy, ScatteredPowerAtMostIncident) {
-  auto dir = test::scratch_dir("stress_energy");
+  auto dir = test::scratch_dir("stress_energy_" + GetParam());
   auto pipeline = make_pipeline(GetParam(), test::shared_gpu());
   Settings settings;
   if (GetParam() == "reference") settings = {{"spp", 12}};

@@ -184,7 +184,7 @@ bool compared(const std::string& pipeline, const std::string& camera) {
 }
 
 TEST_P(Precision, HomogeneousBoxSingleTerm) {
-  auto dir = test::scratch_dir("stress_precision");
+  auto dir = test::scratch_dir("stress_precision_" + GetParam());
   auto pipeline = make_pipeline(GetParam(), test::shared_gpu());
   for (const Case& c : subset()) {
     Params p;

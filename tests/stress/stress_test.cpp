@@ -4,6 +4,7 @@
 // stress_bounds.cpp where they apply. SCATTER_STRESS=long runs the long mode.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -51,8 +52,15 @@ double time_limit(Mode mode) {
   return mode == Mode::Long ? 120 : 20;
 }
 
+// The grid files of the shells, one folder per test: CTest may run the tests in parallel, and
+// scratch_dir() empties its folder.
 const std::filesystem::path& data_dir() {
-  static const std::filesystem::path dir = test::scratch_dir("stress");
+  static const std::filesystem::path dir = [] {
+    const auto* t = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = "stress_" + std::string(t->test_suite_name()) + "_" + t->name();
+    std::replace(name.begin(), name.end(), '/', '_');
+    return test::scratch_dir(name);
+  }();
   return dir;
 }
 
