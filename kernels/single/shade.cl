@@ -99,14 +99,17 @@ __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, in
 }
 
 // light_tr: light_count blocks of 3 * count floats from light_transmittance (light_grad alike,
-// read with `gradient`). out[i]: the factor; shift[i]: the offset of the Gaussian's centre.
+// read with `gradient`). out[i]: the factor, w the log of its scale (tr_gradient); shift[i]: the
+// offset of the Gaussian's centre; per_light[4 (i light_count + l) + c]: light l's share of the
+// factor without its phase (the splat evaluates that per view ray); cut[i]: see below.
 __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __global const float* sigma_t,
                           __global const float* at, __global const float* position, __global const float* sigma,
                           __global const float* weight, __global const float* sigma_s, __global const float* planes,
                           int count,
                           __global const float* lights, int light_count, __global const float* light_tr,
                           __global const float* light_grad, int gradient, int hessian, float max_gs, float g_phase, float3 eye,
-                          __global float4* out, __global float4* shift, __global float4* axes) {
+                          __global float4* out, __global float4* shift, __global float4* axes,
+                          __global float4* cut, __global float* per_light) {
   int i = get_global_id(0);
   if (i >= count) return;
   Grid grid = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
@@ -118,6 +121,7 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   float view_mean = 0.0f;
   float3 light_g = (float3)(0.0f), light_c = (float3)(0.0f);
   float light_w = 0.0f;
+  float tau_min = INFINITY;  // the least optical depth (eye plus a light) of any channel that adds
   for (int ch = 0; ch < 3; ++ch) {
     float tau = optical_depth(&grid, sigma_t, ch, b, v, 0.0f, de);
     view_mean += tau / 3.0f;
@@ -127,9 +131,16 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
       float3 wl;
       float dist;
       float e = light_irradiance(load_light(lights, l), b, ch, &wl, &dist);
-      if (e <= 0.0f) continue;
-      float c = e * light_tr[((size_t)l * count + i) * 3 + ch] * hg_phase(dot(wl, -v), g_phase);
+      if (e <= 0.0f) {
+        per_light[4 * ((size_t)i * light_count + l) + ch] = 0.0f;
+        continue;
+      }
+      float tr = light_tr[((size_t)l * count + i) * 3 + ch];
+      // Without the phase, which the splat takes per view ray.
+      per_light[4 * ((size_t)i * light_count + l) + ch] = weight[i] * sigma_s[3 * i + ch] * view * e * tr;
+      float c = e * tr * hg_phase(dot(wl, -v), g_phase);
       sum += c;
+      if (c > 0.0f) tau_min = fmin(tau_min, tau - log(tr));
       if (gradient) {
         light_g += c * vload3(2 * ((size_t)l * count + i), light_grad);
         light_c += c * vload3(2 * ((size_t)l * count + i) + 1, light_grad);
@@ -139,7 +150,8 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
     res[ch] = weight[i] * sigma_s[3 * i + ch] * view * sum;
   }
   float3 offset = (float3)(0.0f);
-  float scale = 1.0f;
+  float log_scale = 0.0f;
+  float4 depth_cut = (float4)(0.0f);  // zeros: no cut
   float s = sigma[i];
   float3 axis = (float3)(s);
   if (gradient) {
@@ -149,7 +161,8 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
       g += light_g / light_w;
       curv += light_c / light_w;
     }
-    // A bound on |g| s keeps a wrong slope (a corner, a thin feature) from blowing up the scale.
+    // An optional bound on |g| s (tr_gradient_max; the depth cut below already keeps a wrong slope
+    // from brightening the Gaussian, and the splat takes the scale in log space).
     float gs = length(g) * s;
     if (gs > max_gs) g *= max_gs / gs;
     if (!hessian) curv = (float3)(0.0f);
@@ -162,12 +175,18 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
     curv = prec - inv;
     float3 gp = g + curv * d;
     offset = -gp / prec;
-    // Bounded so that no setting or medium can overflow a float (exp(40) ~ 2e17; the scenes
-    // measured stay below exp(12)).
-    scale = exp(fmin(-dot(g, d) - 0.5f * dot(curv * d, d) + 0.5f * dot(gp * gp, 1.0f / prec), 40.0f));
+    // The scale's logarithm: in a dense medium it is |g|^2 s^2 / 2, far past float's range, and
+    // the moved Gaussian's mass in the medium as small; the splat multiplies them in log space.
+    log_scale = -dot(g, d) - 0.5f * dot(curv * d, d) + 0.5f * dot(gp * gp, 1.0f / prec);
     axis = rsqrt(prec);
+    // The linear model's optical depth, tau_min + g . (x - a), is negative beyond a plane, where
+    // its transmittance would exceed one (a wrong slope, a layer it does not fit): the splat
+    // integrates only on the plane's near side (n . x <= w, as a split piece's plane).
+    if (isfinite(tau_min) && (g.x != 0.0f || g.y != 0.0f || g.z != 0.0f))
+      depth_cut = (float4)(-g, tau_min - dot(g, b));
   }
-  out[i] = (float4)(res[0] * scale, res[1] * scale, res[2] * scale, 0.0f);
+  cut[i] = depth_cut;
+  out[i] = (float4)(res[0], res[1], res[2], log_scale);
   // w: the cut-off radius around the moved centre (3 sigma, widened by the move so that the ball
   // around the sample's own centre, where the product is evaluated, stays covered).
   float smax = fmax(axis.x, fmax(axis.y, axis.z));

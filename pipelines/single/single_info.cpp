@@ -49,8 +49,10 @@ const SettingsTable<SingleSettings>& single_settings() {
             "with exact_tr: the transmittance over each Gaussian as exp of a linear optical depth, "
             "which moves and "
             "scales it"),
-       setting("tr_gradient_max", &S::tr_gradient_max, 0.0, 4.0, frame(),
-               "bound on |gradient| x sigma"),
+       setting("tr_gradient_max", &S::tr_gradient_max, 0.0, 1000.0, frame(),
+               "bound on |gradient| x sigma (1000: none in practice; the splat's depth cut keeps "
+               "the model's "
+               "transmittance at most one)"),
        flag("tr_hessian", &S::tr_hessian, frame(),
             "with tr_gradient: the optical depth's curvature per axis stretches or narrows each "
             "Gaussian")},

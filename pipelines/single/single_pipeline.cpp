@@ -172,7 +172,7 @@ void SinglePipeline::upload() {
   glNamedBufferStorage(colors_.get(),
                        static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
                        GL_MAP_READ_BIT | GL_DYNAMIC_STORAGE_BIT);
-  for (gpu::GlObject* buffer : {&shifts_, &axes_}) {
+  for (gpu::GlObject* buffer : {&shifts_, &axes_, &cuts_}) {
     *buffer = gpu::GlObject::create(gpu::GlKind::Buffer);
     glNamedBufferStorage(buffer->get(),
                          static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
@@ -185,6 +185,7 @@ void SinglePipeline::upload() {
 void SinglePipeline::reset_moves() {
   const SingleBake& b = *current_.bake;
   glClearNamedBufferData(shifts_.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
+  glClearNamedBufferData(cuts_.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
   std::vector<float> axes(size_t(std::max(b.count, 1)) * 4, 0.f);
   for (int i = 0; i < b.count; ++i) std::fill_n(&axes[4 * size_t(i)], 4, b.sigma[i]);
   glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)),
@@ -268,6 +269,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, shifts_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, axes_.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 8, planes_.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 9, cuts_.get());
   uniform1i(shade, "count", b.count);
   uniform1i(shade, "bands", b.params.sh_order);
   uniform1i(shade, "depth_mode", b.params.sh_depth ? 1 : 0);
@@ -291,6 +293,14 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   uniform1i(splat, "third", 2);
   uniform1i(splat, "fourth", 3);
   uniform1i(splat, "clip_back", s.clip_back ? 1 : 0);
+  // exact_tr with a peaked phase: each light's share without its phase, which the fragment takes
+  // per view ray (kPerRayPhaseG in single_pipeline.hpp).
+  uniform1i(
+      splat, "per_ray_phase",
+      s.exact_tr && !scene.lights.empty() && std::abs(scene.medium.g) >= kPerRayPhaseG ? 1 : 0);
+  glProgramUniform1f(splat, glGetUniformLocation(splat, "g"), float(scene.medium.g));
+  set_light_uniforms(splat, scene.lights);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, s.exact_tr ? light_factors_.get() : 0);
   glBindTextureUnit(0, front.color_texture());
   glBindTextureUnit(1, back.color_texture());
   glBindTextureUnit(2, third.color_texture());
@@ -312,7 +322,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glBindTextureUnit(1, 0);
   glBindTextureUnit(2, 0);
   glBindTextureUnit(3, 0);
-  for (GLuint i = 0; i < 8; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+  for (GLuint i = 0; i <= 10; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
   gpu::check_gl("single splat");
   glFinish();
   clock.stop("splat");

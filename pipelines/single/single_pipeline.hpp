@@ -32,12 +32,17 @@
 
 namespace scatter {
 
+// With exact_tr, the splat takes the phase per view ray where |g| is at least this (a peaked
+// phase is narrower than a Gaussian seen from the camera); below, per sample at its centre, which
+// costs the fragment nothing (docs/pipelines/single.md).
+inline constexpr double kPerRayPhaseG = 0.5;
+
 struct SingleSettings {
   SingleBakeParams bake;
   bool clip_back = true;
   bool exact_tr = true;
   bool tr_gradient = true;
-  double tr_gradient_max = 2.0;
+  double tr_gradient_max = 1000.0;
   bool tr_hessian = true;
   static SingleSettings read(const Settings& settings);
 };
@@ -89,7 +94,8 @@ class SinglePipeline : public Pipeline {
   BakeResult bake(const Scene& scene, const SingleSettings& s, const std::string& fp,
                   const BakeProgress& progress);
   void upload();
-  // The samples' own Gaussians in shifts_ (no move) and axes_ (sigma on every axis).
+  // The samples' own Gaussians in shifts_ (no move) and axes_ (sigma on every axis), and no
+  // cut in cuts_.
   void reset_moves();
   // exact_tr: the per-sample factors by kernels/single/shade.cl, written into colors_.
   // With `gradient`, also each Gaussian's offset into shifts_ (kernels/single/shade.cl).
@@ -100,9 +106,11 @@ class SinglePipeline : public Pipeline {
   std::unique_ptr<BakeCache> own_cache_;
   Current current_;
   gpu::GlObject distance_program_, shade_program_, splat_program_, empty_vao_;
-  gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_, planes_;
+  gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_, planes_,
+      cuts_, light_factors_;
   cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_sigma_s_, cl_plane_,
-      cl_out_, cl_shift_, cl_axes_;
+      cl_out_, cl_shift_, cl_axes_, cl_cut_, cl_light_factor_;
+  size_t light_factor_floats_ = 0;  // the size of light_factors_ and cl_light_factor_
 };
 
 }  // namespace scatter

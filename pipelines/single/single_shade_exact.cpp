@@ -30,6 +30,8 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
                            size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     cl_axes_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY,
                           size_t(std::max(b.count, 1)) * 4 * sizeof(float));
+    cl_cut_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY,
+                         size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     current_.cl_uploaded = true;
   }
   const std::vector<std::string> program = with_cl_library({"kernels/single/shade.cl"});
@@ -67,6 +69,19 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
     still_used[key] = tr;
   }
   current_.light_tr = std::move(still_used);
+  // Each light's share per sample, without its phase (the splat takes it per view ray).
+  const size_t per_light_floats =
+      size_t(std::max(b.count, 1)) * 4 * std::max<size_t>(scene.lights.size(), 1);
+  if (per_light_floats != light_factor_floats_) {
+    cl_light_factor_ =
+        cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY, per_light_floats * sizeof(float));
+    gpu_.gl().make_current();
+    light_factors_ = gpu::GlObject::create(gpu::GlKind::Buffer);
+    glNamedBufferStorage(light_factors_.get(),
+                         static_cast<GLsizeiptr>(per_light_floats * sizeof(float)), nullptr,
+                         GL_DYNAMIC_STORAGE_BIT);
+    light_factor_floats_ = per_light_floats;
+  }
   cl::Kernel k(cl.program(program), "shade_exact");
   const Vec3& e = scene.camera.position;
   cl_float3 eye{{float(e.x), float(e.y), float(e.z)}};
@@ -74,13 +89,19 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
                 cl_sigma_, cl_weight_, cl_sigma_s_, cl_plane_, b.count, lights,
                 static_cast<int>(scene.lights.size()), all, all_grad, gradient ? 1 : 0,
                 hessian ? 1 : 0, float(max_gs), float(scene.medium.g), eye, cl_out_, cl_shift_,
-                cl_axes_);
+                cl_axes_, cl_cut_, cl_light_factor_);
   cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
   std::vector<float> out(size_t(b.count) * 4), shift(size_t(b.count) * 4),
-      axes(size_t(b.count) * 4);
+      axes(size_t(b.count) * 4), cut(size_t(b.count) * 4);
   cl.queue().enqueueReadBuffer(cl_out_, CL_TRUE, 0, out.size() * sizeof(float), out.data());
   cl.queue().enqueueReadBuffer(cl_shift_, CL_TRUE, 0, shift.size() * sizeof(float), shift.data());
   cl.queue().enqueueReadBuffer(cl_axes_, CL_TRUE, 0, axes.size() * sizeof(float), axes.data());
+  cl.queue().enqueueReadBuffer(cl_cut_, CL_TRUE, 0, cut.size() * sizeof(float), cut.data());
+  std::vector<float> shares(per_light_floats, 0.f);
+  if (!scene.lights.empty())
+    cl.queue().enqueueReadBuffer(cl_light_factor_, CL_TRUE, 0,
+                                 size_t(b.count) * 4 * scene.lights.size() * sizeof(float),
+                                 shares.data());
   gpu_.gl().make_current();
   glNamedBufferSubData(colors_.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(float)),
                        out.data());
@@ -88,6 +109,10 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
                        shift.data());
   glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)),
                        axes.data());
+  glNamedBufferSubData(cuts_.get(), 0, static_cast<GLsizeiptr>(cut.size() * sizeof(float)),
+                       cut.data());
+  glNamedBufferSubData(light_factors_.get(), 0,
+                       static_cast<GLsizeiptr>(shares.size() * sizeof(float)), shares.data());
 }
 
 }  // namespace scatter

@@ -12,6 +12,9 @@ layout(std430, binding = 7) readonly buffer Axes { vec4 axes[]; };
 
 // A piece split at an extinction jump counts only where n . x <= d (xyz n, w d; zeros: everywhere).
 layout(std430, binding = 8) readonly buffer Planes { vec4 plane[]; };
+// Where the transmittance model's optical depth is negative: integrate only where n . x <= d
+// (exact_tr with tr_gradient: kernels/single/shade.cl; zeros: everywhere).
+layout(std430, binding = 9) readonly buffer Cuts { vec4 cut[]; };
 
 uniform mat4 view_projection;
 uniform vec3 eye;
@@ -20,14 +23,20 @@ flat out vec3 center;
 flat out vec3 gauss_sigma;
 flat out float cutoff;  // radius of the ball the Gaussian is integrated over
 flat out vec3 factor;
+flat out float log_scale;  // the factor's scale, as its logarithm (tr_gradient; else 0)
 flat out vec4 clip_plane;
+flat out vec4 depth_cut;
+flat out int sample_index;
 
 void main() {
   uint i = uint(gl_InstanceID);
   center = vec3(position[3u * i], position[3u * i + 1u], position[3u * i + 2u]) + shift[i].xyz;
   gauss_sigma = axes[i].xyz;
   factor = color[i].rgb;
+  log_scale = color[i].w;
   clip_plane = plane[i];
+  depth_cut = cut[i];
+  sample_index = int(i);
   vec2 corner = vec2(gl_VertexID & 1, (gl_VertexID >> 1) & 1) * 2.0 - 1.0;
   float radius = max(3.0 * max(gauss_sigma.x, max(gauss_sigma.y, gauss_sigma.z)), shift[i].w);
   cutoff = radius;

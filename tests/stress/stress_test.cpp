@@ -89,13 +89,14 @@ struct Tally {
 std::string known_failure(const std::string& pipeline, const StressCase& c,
                           const std::string& failure) {
   if (pipeline != "single" || failure.rfind("energy above", 0) != 0) return "";
-  // Optically thick voxels: each Gaussian carries sigma_s over about a sample spacing, many mean
-  // free paths, with the transmittance of its centre; the exponential model (tr_gradient) that
-  // narrows it is capped at |g| s <= tr_gradient_max.
-  if (c.params.tau_voxel >= 1) return "single term above the bound in optically thick voxels";
-  // A peaked phase: it is taken per sample (towards the eye from its centre), not per view ray,
-  // and the peak is narrower than a Gaussian's angular extent.
-  if (std::abs(c.params.g) >= 0.9) return "single term above the bound: phase per sample";
+  // Density detail of one voxel (layers, a shell, noise) several mean free paths deep, under the
+  // suite's 200 samples for 8^3 or 16^3 voxels: a sample carries its centre's sigma_s over a cell
+  // wider than the detail, dense next to empty, and a view ray through the empty part gathers the
+  // dense part's Gaussians without their attenuation (mixed/102: x2.08; 2000 samples pass). A
+  // sampling limit of the method (docs/STRESS.md).
+  const std::string& d = c.params.density;
+  if ((d == "layers" || d == "shell" || d == "noise") && c.params.tau_voxel >= 1)
+    return "single term above the bound: density detail finer than the sample spacing";
   return "";
 }
 
@@ -178,7 +179,9 @@ TEST_P(Stress, ExtremeScenes) {
     for (const std::string& f : failed) {
       if (std::string known = known_failure(GetParam(), c, f); !known.empty()) {
         ++known_failures;
-        std::printf("known failure %s %s: %s\n", GetParam().c_str(), what.c_str(), f.c_str());
+        std::printf("known failure %s %s [%s, density %s, sigma_t x voxel %g, g %g]: %s\n",
+                    GetParam().c_str(), what.c_str(), known.c_str(), c.params.density.c_str(),
+                    c.params.tau_voxel, c.params.g, f.c_str());
         continue;
       }
       ADD_FAILURE() << what << ": " << f << "\n" << c.scene.dump();

@@ -97,7 +97,11 @@ TEST_F(SinglePipelineTest, TransmittanceGradientMatchesTheClosedForm) {
     EXPECT_NEAR(shifts[4 * i], 0.0, 0.05 * expected) << i;
     EXPECT_NEAR(shifts[4 * i + 1], 0.0, 0.05 * expected) << i;
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(axes[4 * i + k], sg, 0.01 * sg) << i;
-    EXPECT_NEAR(moved[4 * i] / plain[4 * i], std::exp(2 * st * st * sg * sg), 0.01) << i;
+    // The scale travels as its logarithm in the factor's fourth component.
+    EXPECT_NEAR(moved[4 * i + 3], 2 * st * st * sg * sg, 0.01) << i;
+    EXPECT_NEAR(std::exp(moved[4 * i + 3]) * moved[4 * i] / plain[4 * i],
+                std::exp(2 * st * st * sg * sg), 0.01)
+        << i;
     ++checked;
   }
   EXPECT_GT(checked, 200);  // 293 with this bake
