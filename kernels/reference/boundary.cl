@@ -1,8 +1,11 @@
-// The mesh boundary of a dielectric medium (ior != 1): closest hits through the flattened BVH
-// (scene/bvh.hpp), reflection and refraction, and the Fresnel transmittance of a straight shadow
-// ray. Point and directional lights cannot be reached through a refracting surface by a sampled
-// direction, so shadow rays go straight and are weighted by (1 - F) at each crossing; view rays and
-// paths refract exactly.
+// The mesh boundary of the medium: closest hits through the flattened BVH (scene/bvh.hpp), the
+// medium's extent along a ray, and, for a dielectric medium (ior != 1), reflection, refraction and
+// the Fresnel transmittance of a straight shadow ray. The medium is the density grid inside the
+// mesh: a segment of a ray lies inside iff the next mesh crossing after it leaves the mesh
+// (dot(d, n) > 0 with outward normals), which does not depend on counting crossings from the
+// camera and so survives a crossing lost to rounding. Point and directional lights cannot be
+// reached through a refracting surface by a sampled direction, so shadow rays go straight and are
+// weighted by (1 - F) at each crossing; view rays and paths refract exactly.
 
 typedef struct {
   __global const float* bounds;  // 8 floats per node
@@ -75,19 +78,80 @@ float3 refract_dir(float3 d, float3 n, float eta, float cos_t) {
   return normalize(eta * d + (eta * cos_i - cos_t) * n);
 }
 
-// Product of (1 - F) over the boundary crossings of the straight segment o + t d, t in (0, tmax).
-float boundary_transmittance(Bvh bvh, float ior, float3 o, float3 d, float tmax) {
-  float tr = 1.0f, t0 = 0.0f;
-  for (int k = 0; k < 32 && tr > 0.0f; ++k) {
+// The crossings of the straight segment o + t d, t in (0, tmax), at most this many.
+#define MAX_CROSSINGS 32
+
+// Along the shadow segment o + t d, t in (0, dist), from a point inside the medium: the
+// transmittance of the three channels through the medium (ratio tracking over the parts inside
+// the mesh) times, for a dielectric, (1 - F) at each crossing. With no crossing at all, the
+// segment is inside only towards a point light (one inside the mesh); towards a directional
+// light the point was outside after rounding.
+float3 shadow_transmittance(const Grid* g, __global const float* sigma_t,
+                            __global const float* majorant, Bvh bvh, float ior, float3 o,
+                            float3 d, float dist, Rng* r) {
+  float3 tr = (float3)(1.0f);
+  float t0 = 0.0f;
+  bool any = false;
+  for (int k = 0; k < MAX_CROSSINGS && max3(tr) > 0.0f; ++k) {
     float t;
     float3 n;
     // The first search starts at the point itself (a crossing right next to it still counts);
     // later ones step past the crossing just found.
-    if (!mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + BOUNDARY_EPS, tmax, &t, &n)) break;
-    float c = dot(d, n);  // > 0: leaving the medium
-    float cos_t;
-    tr *= 1.0f - fresnel(fabs(c), c > 0.0f ? ior : 1.0f / ior, &cos_t);
+    if (!mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + BOUNDARY_EPS, dist, &t, &n)) {
+      if (!any && !isinf(dist)) tr *= ratio_track(g, sigma_t, majorant, o, d, dist, r);
+      return tr;
+    }
+    float c = dot(d, n);  // > 0: leaving the medium, so [t0, t] was inside
+    if (c > 0.0f && t > t0) tr *= ratio_track(g, sigma_t, majorant, o + d * t0, d, t - t0, r);
+    if (ior != 1.0f) {
+      float cos_t;
+      tr *= 1.0f - fresnel(fabs(c), c > 0.0f ? ior : 1.0f / ior, &cos_t);
+    }
     t0 = t;
+    any = true;
+    if (c < 0.0f && !isinf(dist)) {
+      // Entering again: what lies past t up to the light is inside if no crossing follows.
+      float t2;
+      float3 n2;
+      if (!mesh_hit(bvh, o, d, t0 + BOUNDARY_EPS, dist, &t2, &n2)) {
+        tr *= ratio_track(g, sigma_t, majorant, o + d * t0, d, dist - t0, r);
+        return tr;
+      }
+    }
   }
   return tr;
+}
+
+// The optical depth of `channel` along the shadow segment o + t d, t in (0, dist), from a point
+// inside the medium, over the parts inside the mesh (as shadow_transmittance), and in *fresnel_tr
+// the product of (1 - F) over the crossings for a dielectric (1 when index matched).
+float shadow_depth(const Grid* g, __global const float* sigma_t, int channel, Bvh bvh, float ior,
+                   float3 o, float3 d, float dist, float* fresnel_tr) {
+  float tau = 0.0f, t0 = 0.0f;
+  *fresnel_tr = 1.0f;
+  for (int k = 0; k < MAX_CROSSINGS; ++k) {
+    float t;
+    float3 n;
+    bool hit = mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + BOUNDARY_EPS, dist, &t, &n);
+    if (!hit) {
+      // Past the last crossing: inside only if it entered (or, with none, towards a point light).
+      bool inside = k == 0 ? !isinf(dist) : false;
+      if (inside) tau += optical_depth(g, sigma_t, channel, o, d, t0, dist);
+      return tau;
+    }
+    float c = dot(d, n);
+    if (c > 0.0f && t > t0) tau += optical_depth(g, sigma_t, channel, o, d, t0, t);
+    if (ior != 1.0f) {
+      float cos_t;
+      *fresnel_tr *= 1.0f - fresnel(fabs(c), c > 0.0f ? ior : 1.0f / ior, &cos_t);
+    }
+    t0 = t;
+    if (c < 0.0f && !isinf(dist)) {
+      float t2;
+      float3 n2;
+      if (!mesh_hit(bvh, o, d, t0 + BOUNDARY_EPS, dist, &t2, &n2))
+        return tau + optical_depth(g, sigma_t, channel, o, d, t0, dist);
+    }
+  }
+  return tau;
 }
