@@ -15,32 +15,55 @@ typedef struct {
 
 #define BOUNDARY_EPS 1e-4f
 
-bool box_hit(__global const float* b, float3 o, float3 inv, float t0, float t1) {
+// Entry distance of o + t d into box b within [t0, t1], or INFINITY when it misses.
+float box_entry(__global const float* b, float3 o, float3 inv, float t0, float t1) {
   float3 lo = (float3)(b[0], b[1], b[2]), hi = (float3)(b[4], b[5], b[6]);
   float3 a = (lo - o) * inv, c = (hi - o) * inv;
   float3 mn = fmin(a, c), mx = fmax(a, c);
   float n = fmax(fmax(mn.x, mn.y), fmax(mn.z, t0));
   float f = fmin(fmin(mx.x, mx.y), fmin(mx.z, t1));
-  return n <= f;
+  return n <= f ? n : INFINITY;
 }
 
 // Closest intersection with t in (t0, t1): its distance and the triangle's unit normal (outward
-// for a mesh wound counter-clockwise seen from outside, as scene meshes are).
+// for a mesh wound counter-clockwise seen from outside, as scene meshes are). Children are
+// visited nearer first, and a box entered past the closest hit so far is skipped.
 bool mesh_hit(Bvh bvh, float3 o, float3 d, float t0, float t1, float* t_hit, float3* normal) {
   float3 inv = 1.0f / d;
   int stack[64];
+  float entry[64];
   int top = 0;
-  stack[top++] = 0;
   float best = t1;
   bool found = false;
+  float root = box_entry(bvh.bounds, o, inv, t0, best);
+  if (root < INFINITY) {
+    stack[top] = 0;
+    entry[top++] = root;
+  }
   while (top > 0) {
-    int node = stack[--top];
-    if (!box_hit(bvh.bounds + 8 * node, o, inv, t0, best)) continue;
+    --top;
+    if (entry[top] > best) continue;
+    int node = stack[top];
     int a = bvh.links[2 * node], count = bvh.links[2 * node + 1];
     if (count == 0) {
-      if (top < 62) {
-        stack[top++] = a;
-        stack[top++] = node + 1;
+      // Inner node: children node + 1 and a; push the farther first so the nearer pops next.
+      float e1 = box_entry(bvh.bounds + 8 * (node + 1), o, inv, t0, best);
+      float e2 = box_entry(bvh.bounds + 8 * a, o, inv, t0, best);
+      int n1 = node + 1, n2 = a;
+      if (e2 < e1) {
+        float te = e1;
+        e1 = e2;
+        e2 = te;
+        n1 = a;
+        n2 = node + 1;
+      }
+      if (e2 < INFINITY && top < 63) {
+        stack[top] = n2;
+        entry[top++] = e2;
+      }
+      if (e1 < INFINITY && top < 63) {
+        stack[top] = n1;
+        entry[top++] = e1;
       }
       continue;
     }
@@ -78,17 +101,25 @@ float3 refract_dir(float3 d, float3 n, float eta, float cos_t) {
   return normalize(eta * d + (eta * cos_i - cos_t) * n);
 }
 
+// How far from p the medium has no boundary (pipelines/reference/inside_grid: interior_depth).
+float interior_distance(const Grid* g, __global const uchar* interior, float3 p) {
+  int3 c = voxel_of(g, p);
+  if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= g->nx || c.y >= g->ny || c.z >= g->nz) return 0.0f;
+  return interior[voxel_index(g, c.x, c.y, c.z)] * g->voxel;
+}
+
 // The crossings of the straight segment o + t d, t in (0, tmax), at most this many.
 #define MAX_CROSSINGS 32
 
 // Along the shadow segment o + t d, t in (0, dist), from a point inside the medium: the
 // transmittance of the three channels through the medium (ratio tracking over the parts inside
-// the mesh) times, for a dielectric, (1 - F) at each crossing. With no crossing at all, the
+// the mesh) times, for a dielectric, (1 - F) at each crossing; `convex`: the first crossing that
+// leaves is the last. With no crossing at all, the
 // segment is inside only towards a point light (one inside the mesh); towards a directional
 // light the point was outside after rounding.
 float3 shadow_transmittance(const Grid* g, __global const float* sigma_t,
-                            __global const float* majorant, Bvh bvh, float ior, float3 o,
-                            float3 d, float dist, Rng* r) {
+                            __global const float* majorant, Bvh bvh, float ior, bool convex,
+                            float3 o, float3 d, float dist, Rng* r) {
   float3 tr = (float3)(1.0f);
   float t0 = 0.0f;
   bool any = false;
@@ -109,6 +140,7 @@ float3 shadow_transmittance(const Grid* g, __global const float* sigma_t,
     }
     t0 = t;
     any = true;
+    if (convex && c > 0.0f) return tr;  // out of a convex mesh for good
     if (c < 0.0f && !isinf(dist)) {
       // Entering again: what lies past t up to the light is inside if no crossing follows.
       float t2;

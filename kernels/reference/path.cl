@@ -23,15 +23,23 @@ float3 light_irradiance3(Light L, float3 x, float3* wl, float* dist) {
 // Light arriving at x and scattered into -d, per channel: sum over the lights.
 float3 next_event(const Grid* g, __global const float* sigma_t, __global const float* majorant,
                   __global const float* lights, int light_count, float g_phase, float3 x, float3 d,
-                  Bvh bvh, float ior, bool use_mesh, Rng* r) {
+                  Bvh bvh, float ior, bool use_mesh, bool convex, float interior, Rng* r) {
   float3 sum = (float3)(0.0f);
   for (int l = 0; l < light_count; ++l) {
     float3 wl;
     float dist;
     float3 e = light_irradiance3(load_light(lights, l), x, &wl, &dist);
     if (max3(e) <= 0.0f) continue;
-    e *= use_mesh ? shadow_transmittance(g, sigma_t, majorant, bvh, ior, x, wl, dist, r)
-                  : ratio_track(g, sigma_t, majorant, x, wl, dist, r);
+    if (!use_mesh) {
+      e *= ratio_track(g, sigma_t, majorant, x, wl, dist, r);
+    } else {
+      // Within `interior` of x there is no boundary: track that far without the mesh.
+      float s = fmin(interior, dist);
+      if (s > 0.0f) e *= ratio_track(g, sigma_t, majorant, x, wl, s, r);
+      if (s < dist && max3(e) > 0.0f)
+        e *= shadow_transmittance(g, sigma_t, majorant, bvh, ior, convex, x + wl * s, wl,
+                                  dist - s, r);
+    }
     if (max3(e) <= 0.0f) continue;
     sum += e * hg_phase(dot(wl, d), g_phase);
   }
@@ -44,7 +52,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
                          __global const float* lights, int light_count, float g_phase,
                          __global const float* camera, int width, int height, int terms,
                          int spp, int first_sample, uint seed, int max_depth, float ior,
-                         int use_mesh,
+                         int use_mesh, int convex, __global const uchar* interior,
                          __global const float* bvh_bounds, __global const int* bvh_links,
                          __global const float* bvh_tris, float sq_scale, __global float* sum,
                          __global float* sum_sq) {
@@ -61,26 +69,36 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
     float3 o = cam.position, d = d0;
     float3 weight = (float3)(1.0f), value = (float3)(0.0f);
     int depth = 0;
+    float safe = 0.0f;  // at a vertex: how far the medium has no boundary
     for (int events = 0; events < 4 * max_depth + 64; ++events) {
-      float t_surface = INFINITY;
+      float t_surface = INFINITY, t;
       float3 n;
-      // From a point in the volume any crossing counts (tmin 0); after a surface event the origin
-      // was already moved off the surface along its normal.
-      // Without the mesh (voxel_boundary, index matched) the medium is the grid alone.
-      bool hit = use_mesh && mesh_hit(bvh, o, d, 0.0f, INFINITY, &t_surface, &n);
-      if (use_mesh && !hit) break;  // a ray with no crossing ahead is outside the mesh
-      // Inside iff the crossing ahead leaves the mesh.
-      bool inside = !use_mesh || dot(d, n) > 0.0f;
-      float t;
-      if (inside &&
-          delta_track(&g, sigma_s, sigma_t, majorant, o, d, t_surface, &weight, &r, &t)) {
+      bool hit = false, inside = true;
+      // Within `safe` the flight needs no mesh; past it, the flight goes on from there.
+      bool collided = safe > 0.0f &&
+                      delta_track(&g, sigma_s, sigma_t, majorant, o, d, safe, &weight, &r, &t);
+      if (!collided) {
+        o = o + d * safe;
+        // From a point in the volume any crossing counts (tmin 0); after a surface event the
+        // origin was already moved off the surface along its normal. Without the mesh
+        // (voxel_boundary, index matched) the medium is the grid alone.
+        hit = use_mesh && mesh_hit(bvh, o, d, 0.0f, INFINITY, &t_surface, &n);
+        if (use_mesh && !hit) break;  // a ray with no crossing ahead is outside the mesh
+        // Inside iff the crossing ahead leaves the mesh.
+        inside = !use_mesh || dot(d, n) > 0.0f;
+        collided = inside && delta_track(&g, sigma_s, sigma_t, majorant, o, d, t_surface,
+                                         &weight, &r, &t);
+      }
+      safe = 0.0f;
+      if (collided) {
         // A real collision (weights already scaled by the albedo): add light scattered here,
         // scatter on.
         o = o + d * t;
+        if (use_mesh) safe = interior_distance(&g, interior, o);
         if (max3(weight) <= 0.0f || ++depth > max_depth) break;
         if ((depth == 1 && (terms & 1)) || (depth > 1 && (terms & 2)))
           value += weight * next_event(&g, sigma_t, majorant, lights, light_count, g_phase, o, d,
-                                       bvh, ior, use_mesh, &r);
+                                       bvh, ior, use_mesh, convex, safe, &r);
         if (!(terms & 2)) break;  // single scattering only: the path ends at its first vertex
         d = hg_sample(d, g_phase, &r);
         float top = max3(weight);
@@ -95,6 +113,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
       float3 p = o + d * t_surface;
       if (inside) n = -n;  // face the incident side
       if (ior == 1.0f) {  // index matched: the path crosses unchanged
+        if (convex && inside) break;  // out of a convex mesh for good
         o = p - n * BOUNDARY_EPS;
         continue;
       }
@@ -106,6 +125,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
         d = reflect_dir(d, n);
         o = p + n * BOUNDARY_EPS;
       } else {
+        if (convex && inside) break;  // out of a convex mesh for good
         d = refract_dir(d, n, eta, ct);
         o = p - n * BOUNDARY_EPS;
       }

@@ -8,6 +8,7 @@
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/common/stage_clock.hpp"
 #include "pipelines/metrics.hpp"
+#include "pipelines/reference/convex.hpp"
 #include "pipelines/reference/inside_grid.hpp"
 #include "scene/bvh.hpp"
 
@@ -121,6 +122,12 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     cl.queue().enqueueWriteBuffer(bvh_links, CL_TRUE, 0, bvh.links.size() * sizeof(int32_t),
                                   bvh.links.data());
   const float ior = static_cast<float>(scene.medium.ior);
+  // How far each voxel is from the boundary, and whether a path once out stays out.
+  std::vector<uint8_t> interior =
+      mesh_bounds ? interior_depth(grid) : std::vector<uint8_t>(grid.count(), 0);
+  cl::Buffer interior_buf(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, interior.size(),
+                          interior.data());
+  const int convex = (mesh_bounds || dielectric) && is_convex(*scene.mesh);
   ClMedium medium = upload_medium(cl, grid);
   cl::Buffer lights = upload(cl, pack_lights(scene.lights));
   cl::Buffer camera = upload(cl, pack_camera(scene.camera, scene.width, scene.height));
@@ -181,7 +188,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                   medium.bricks.brick, medium.bricks.bx, medium.bricks.by, medium.bricks.bz,
                   medium.sigma_s, medium.sigma_t, medium.majorant, lights, light_count, g, camera,
                   w, h, terms, n, done, s.seed, s.max_depth, ior, int(mesh_bounds || dielectric),
-                  bvh_bounds, bvh_links, bvh_tris, float(sq_scale), sum, sum_sq);
+                  convex, interior_buf, bvh_bounds, bvh_links, bvh_tris, float(sq_scale), sum,
+                  sum_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     spp = done + n;

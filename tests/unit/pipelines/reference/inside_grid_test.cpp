@@ -36,3 +36,29 @@ TEST(RestrictToMesh, DividesByTheOccupancyAndFillsEmptyNeighbours) {
 
 }  // namespace
 }  // namespace scatter
+
+namespace scatter {
+namespace {
+
+// A 9^3 block of full voxels in an 11^3 grid with one partly occupied voxel in it: the centre is 3
+// voxels (Chebyshev) from it, so 1 is safe (less one for the gap, one for a missed sliver).
+TEST(InteriorDepth, IsTheChebyshevDistanceToTheBoundaryLessTwo) {
+  VoxelGrid g;
+  g.nx = g.ny = g.nz = 11;
+  g.voxel = 1;
+  g.occupancy.assign(g.count(), 0.0f);
+  for (int k = 1; k < 10; ++k)
+    for (int j = 1; j < 10; ++j)
+      for (int i = 1; i < 10; ++i) g.occupancy[g.index(i, j, k)] = 1.0f;
+  g.occupancy[g.index(5, 5, 2)] = 0.5f;  // a boundary voxel inside, below the centre
+  std::vector<uint8_t> d = interior_depth(g);
+  EXPECT_EQ(d[g.index(5, 5, 5)], 1);  // 3 voxels to (5, 5, 2)
+  EXPECT_EQ(d[g.index(5, 5, 7)], 1);  // 3 to the outside at z = 10
+  EXPECT_EQ(d[g.index(5, 5, 8)], 0);  // 2 to it
+  EXPECT_EQ(d[g.index(1, 1, 1)], 0);
+  EXPECT_EQ(d[g.index(0, 0, 0)], 0);
+  EXPECT_EQ(d[g.index(5, 5, 3)], 0);
+}
+
+}  // namespace
+}  // namespace scatter
