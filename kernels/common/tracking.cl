@@ -1,4 +1,4 @@
-// Spectral delta and ratio tracking in the voxel medium with per-brick majorants, all three colour
+// Spectral delta tracking, exact and ratio-tracked transmittance in the voxel medium with per-brick majorants, all three colour
 // channels at once; after rng.cl and dda.cl. Part of the kernels' shared library
 // (pipelines/common/cl_library.hpp).
 //
@@ -106,6 +106,29 @@ bool delta_track(const Grid* g, __global const float* sigma_s, __global const fl
     }
   }
   return false;
+}
+
+// The exact transmittance of the three channels along o + t d, t in [0, tmax]: the optical depth
+// summed voxel by voxel (each voxel is constant), walking only the bricks that hold any medium. No
+// randomness: a shadow ray's transmittance without the variance of ratio tracking, whose estimate
+// where the majorant is tight (a homogeneous medium) is 0 or 1.
+float3 exact_transmittance(const Grid* g, __global const float* sigma_t,
+                           __global const float* majorant, float3 o, float3 d, float tmax) {
+  Dda s;
+  if (!brick_walk(g, o, d, tmax, &s)) return (float3)(1.0f);
+  float3 tau = (float3)(0.0f);
+  float a, b;
+  int3 c;
+  while (dda_next(&s, &a, &b, &c)) {
+    if (majorant[(c.z * g->by + c.y) * g->bx + c.x] <= 0.0f) continue;
+    Dda v;
+    dda_init(&v, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), a, b);
+    float va, vb;
+    int3 vc;
+    while (dda_next(&v, &va, &vb, &vc)) tau += voxel_sigma3(g, sigma_t, vc) * (vb - va);
+    if (max3(-tau) < -80.0f) return (float3)(0.0f);  // below float32's range in every channel
+  }
+  return exp(-tau);
 }
 
 // Ratio tracking of the three channels at once: an unbiased estimate of each channel's

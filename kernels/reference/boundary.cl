@@ -129,11 +129,11 @@ float3 shadow_transmittance(const Grid* g, __global const float* sigma_t,
     // The first search starts at the point itself (a crossing right next to it still counts);
     // later ones step past the crossing just found.
     if (!mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + BOUNDARY_EPS, dist, &t, &n)) {
-      if (!any && !isinf(dist)) tr *= ratio_track(g, sigma_t, majorant, o, d, dist, r);
+      if (!any && !isinf(dist)) tr *= exact_transmittance(g, sigma_t, majorant, o, d, dist);
       return tr;
     }
     float c = dot(d, n);  // > 0: leaving the medium, so [t0, t] was inside
-    if (c > 0.0f && t > t0) tr *= ratio_track(g, sigma_t, majorant, o + d * t0, d, t - t0, r);
+    if (c > 0.0f && t > t0) tr *= exact_transmittance(g, sigma_t, majorant, o + d * t0, d, t - t0);
     if (ior != 1.0f) {
       float cos_t;
       tr *= 1.0f - fresnel(fabs(c), c > 0.0f ? ior : 1.0f / ior, &cos_t);
@@ -146,7 +146,7 @@ float3 shadow_transmittance(const Grid* g, __global const float* sigma_t,
       float t2;
       float3 n2;
       if (!mesh_hit(bvh, o, d, t0 + BOUNDARY_EPS, dist, &t2, &n2)) {
-        tr *= ratio_track(g, sigma_t, majorant, o + d * t0, d, dist - t0, r);
+        tr *= exact_transmittance(g, sigma_t, majorant, o + d * t0, d, dist - t0);
         return tr;
       }
     }

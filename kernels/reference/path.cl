@@ -1,6 +1,6 @@
 // Monte Carlo volumetric path tracer: spectral delta tracking in the voxel medium with per-brick
 // majorants (kernels/common/tracking.cl: every path carries the three colour channels with their
-// own weights), next-event estimation to every light with ratio-tracked shadow rays,
+// own weights), next-event estimation to every light with shadow rays whose transmittance is exact (summed voxel by voxel),
 // Henyey-Greenstein sampling, Russian roulette on the path's largest weight.
 //
 // The medium is the density grid inside the mesh (boundary.cl): tracking stops at every mesh
@@ -31,11 +31,11 @@ float3 next_event(const Grid* g, __global const float* sigma_t, __global const f
     float3 e = light_irradiance3(load_light(lights, l), x, &wl, &dist);
     if (max3(e) <= 0.0f) continue;
     if (!use_mesh) {
-      e *= ratio_track(g, sigma_t, majorant, x, wl, dist, r);
+      e *= exact_transmittance(g, sigma_t, majorant, x, wl, dist);
     } else {
       // Within `interior` of x there is no boundary: track that far without the mesh.
       float s = fmin(interior, dist);
-      if (s > 0.0f) e *= ratio_track(g, sigma_t, majorant, x, wl, s, r);
+      if (s > 0.0f) e *= exact_transmittance(g, sigma_t, majorant, x, wl, s);
       if (s < dist && max3(e) > 0.0f)
         e *= shadow_transmittance(g, sigma_t, majorant, bvh, ior, convex, x + wl * s, wl,
                                   dist - s, r);

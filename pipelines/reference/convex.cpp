@@ -34,7 +34,8 @@ bool is_convex(const Mesh& mesh) {
     if (!(len > 0)) continue;  // a degenerate triangle has no plane to test
     n = n * (1 / len);
     for (int k = 0; k < 3; ++k) {
-      auto twin = edge.find(key(id[mesh.indices[3 * t + (k + 1) % 3]], id[mesh.indices[3 * t + k]]));
+      auto twin =
+          edge.find(key(id[mesh.indices[3 * t + (k + 1) % 3]], id[mesh.indices[3 * t + k]]));
       if (twin == edge.end()) return false;  // open: not a closed surface
       for (int m = 0; m < 3; ++m)
         if (dot(n, mesh.positions[mesh.indices[3 * twin->second + m]] - a) > tolerance)
