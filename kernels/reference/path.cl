@@ -1,7 +1,8 @@
 // Monte Carlo volumetric path tracer: spectral delta tracking in the voxel medium with per-brick
 // majorants (kernels/common/tracking.cl: every path carries the three colour channels with their
-// own weights), next-event estimation to every light with shadow rays whose transmittance is exact (summed voxel by voxel),
-// Henyey-Greenstein sampling, Russian roulette on the path's largest weight.
+// own weights), next-event estimation to every light with shadow rays whose transmittance is
+// exact (summed voxel by voxel), Henyey-Greenstein sampling, Russian roulette on the path's
+// largest weight.
 //
 // The medium is the density grid inside the mesh (boundary.cl): tracking stops at every mesh
 // crossing, and a segment is tracked only if it lies inside. With ior != 1 the mesh is also a

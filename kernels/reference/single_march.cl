@@ -79,7 +79,8 @@ float march_segment(const Grid* g, __global const float* sigma_s, __global const
       float in_scatter = 0.0f;
       for (int l = 0; l < light_count; ++l) {
         float tau1;
-        float e1 = unattenuated(g, sigma_t, lights, l, g_phase, ch, p1, d, bvh, ior, use_mesh, &tau1);
+        float e1 =
+            unattenuated(g, sigma_t, lights, l, g_phase, ch, p1, d, bvh, ior, use_mesh, &tau1);
         if (e0[l] > 0.0f || e1 > 0.0f) {
           // The light's depth, linear through the two ends, at the sub-step's start and its slope.
           // (An optical depth is never negative: where the light's depth is far from linear, a
