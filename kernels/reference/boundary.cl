@@ -11,9 +11,16 @@ typedef struct {
   __global const float* bounds;  // 8 floats per node
   __global const int* links;     // 2 ints per node
   __global const float* tris;    // 12 floats per triangle
+  float eps;                     // the scene's smallest step past a crossing (a voxel's 1e-3)
 } Bvh;
 
-#define BOUNDARY_EPS 1e-4f
+// How far past a crossing at p the next search starts, so that it does not find the same surface
+// again: the scene's step or, far from the origin, a few float32 steps of p. Rays leave a crossing
+// from the crossing point itself and track the medium from there, so that no medium is skipped
+// (a dense voxel's light comes from within 1e-3 of a voxel of its face).
+float surface_eps(Bvh bvh, float3 p) {
+  return fmax(bvh.eps, 1e-6f * (fabs(p.x) + fabs(p.y) + fabs(p.z)));
+}
 
 // Entry distance of o + t d into box b within [t0, t1], or INFINITY when it misses.
 float box_entry(__global const float* b, float3 o, float3 inv, float t0, float t1) {
@@ -128,7 +135,7 @@ float3 shadow_transmittance(const Grid* g, __global const float* sigma_t,
     float3 n;
     // The first search starts at the point itself (a crossing right next to it still counts);
     // later ones step past the crossing just found.
-    if (!mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + BOUNDARY_EPS, dist, &t, &n)) {
+    if (!mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + surface_eps(bvh, o + d * t0), dist, &t, &n)) {
       if (!any && !isinf(dist)) tr *= exact_transmittance(g, sigma_t, majorant, o, d, dist);
       return tr;
     }
@@ -145,7 +152,7 @@ float3 shadow_transmittance(const Grid* g, __global const float* sigma_t,
       // Entering again: what lies past t up to the light is inside if no crossing follows.
       float t2;
       float3 n2;
-      if (!mesh_hit(bvh, o, d, t0 + BOUNDARY_EPS, dist, &t2, &n2)) {
+      if (!mesh_hit(bvh, o, d, t0 + surface_eps(bvh, o + d * t0), dist, &t2, &n2)) {
         tr *= exact_transmittance(g, sigma_t, majorant, o + d * t0, d, dist - t0);
         return tr;
       }
@@ -164,7 +171,8 @@ float shadow_depth(const Grid* g, __global const float* sigma_t, int channel, Bv
   for (int k = 0; k < MAX_CROSSINGS; ++k) {
     float t;
     float3 n;
-    bool hit = mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + BOUNDARY_EPS, dist, &t, &n);
+    bool hit =
+        mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + surface_eps(bvh, o + d * t0), dist, &t, &n);
     if (!hit) {
       // Past the last crossing: inside only if it entered (or, with none, towards a point light).
       bool inside = k == 0 ? !isinf(dist) : false;
@@ -181,7 +189,7 @@ float shadow_depth(const Grid* g, __global const float* sigma_t, int channel, Bv
     if (c < 0.0f && !isinf(dist)) {
       float t2;
       float3 n2;
-      if (!mesh_hit(bvh, o, d, t0 + BOUNDARY_EPS, dist, &t2, &n2))
+      if (!mesh_hit(bvh, o, d, t0 + surface_eps(bvh, o + d * t0), dist, &t2, &n2))
         return tau + optical_depth(g, sigma_t, channel, o, d, t0, dist);
     }
   }

@@ -60,7 +60,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
   Grid g = make_grid(origin, voxel, nx, ny, nz, brick, bx, by, bz);
-  Bvh bvh = {bvh_bounds, bvh_links, bvh_tris};
+  Bvh bvh = {bvh_bounds, bvh_links, bvh_tris, 1e-3f * voxel};
   Cam cam = load_camera(camera);
   float3 d0 = camera_ray(cam, x, y, width, height, 0.5f, 0.5f);
   float3 acc = (float3)(0.0f), acc2 = (float3)(0.0f);
@@ -71,6 +71,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
     float3 weight = (float3)(1.0f), value = (float3)(0.0f);
     int depth = 0;
     float safe = 0.0f;  // at a vertex: how far the medium has no boundary
+    float tmin = 0.0f;  // at a crossing: where the next search starts (surface_eps)
     for (int events = 0; events < 4 * max_depth + 64; ++events) {
       float t_surface = INFINITY, t;
       float3 n;
@@ -81,9 +82,9 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
       if (!collided) {
         o = o + d * safe;
         // From a point in the volume any crossing counts (tmin 0); after a surface event the
-        // origin was already moved off the surface along its normal. Without the mesh
+        // path leaves from the crossing itself and skips surface_eps of search. Without the mesh
         // (voxel_boundary, index matched) the medium is the grid alone.
-        hit = use_mesh && mesh_hit(bvh, o, d, 0.0f, INFINITY, &t_surface, &n);
+        hit = use_mesh && mesh_hit(bvh, o, d, tmin, INFINITY, &t_surface, &n);
         if (use_mesh && !hit) break;  // a ray with no crossing ahead is outside the mesh
         // Inside iff the crossing ahead leaves the mesh.
         inside = !use_mesh || dot(d, n) > 0.0f;
@@ -91,6 +92,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
                                          &weight, &r, &t);
       }
       safe = 0.0f;
+      tmin = 0.0f;
       if (collided) {
         // A real collision (weights already scaled by the albedo): add light scattered here,
         // scatter on.
@@ -115,7 +117,8 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
       if (inside) n = -n;  // face the incident side
       if (ior == 1.0f) {  // index matched: the path crosses unchanged
         if (convex && inside) break;  // out of a convex mesh for good
-        o = p - n * BOUNDARY_EPS;
+        o = p;
+        tmin = surface_eps(bvh, p);
         continue;
       }
       // A dielectric surface: reflect or refract with Fresnel's probabilities.
@@ -124,12 +127,12 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
       float f = fresnel(-dot(d, n), eta, &ct);
       if (rng_uniform(&r) < f) {
         d = reflect_dir(d, n);
-        o = p + n * BOUNDARY_EPS;
       } else {
         if (convex && inside) break;  // out of a convex mesh for good
         d = refract_dir(d, n, eta, ct);
-        o = p - n * BOUNDARY_EPS;
       }
+      o = p;
+      tmin = surface_eps(bvh, p);
     }
     acc += value;
     acc2 += (value * sq_scale) * value;

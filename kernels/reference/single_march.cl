@@ -103,6 +103,7 @@ float march_segment(const Grid* g, __global const float* sigma_s, __global const
 typedef struct {
   float3 o, d;
   float w;
+  float tmin;  // where the search for the next crossing starts (surface_eps past one)
 } Branch;
 
 __kernel void single_march(float3 origin, float voxel, int nx, int ny, int nz,
@@ -115,7 +116,7 @@ __kernel void single_march(float3 origin, float voxel, int nx, int ny, int nz,
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
   Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);  // no bricks: the marcher walks voxels
-  Bvh bvh = {bvh_bounds, bvh_links, bvh_tris};
+  Bvh bvh = {bvh_bounds, bvh_links, bvh_tris, 1e-3f * voxel};
   Cam cam = load_camera(camera);
   float3 d0 = camera_ray(cam, x, y, width, height, 0.5f, 0.5f);
   float result[3] = {0.0f, 0.0f, 0.0f};
@@ -128,13 +129,13 @@ __kernel void single_march(float3 origin, float voxel, int nx, int ny, int nz,
     }
     Branch stack[16];
     int top = 0, segments = 0;
-    stack[top++] = (Branch){cam.position, d0, 1.0f};
+    stack[top++] = (Branch){cam.position, d0, 1.0f, 0.0f};
     while (top > 0 && segments++ < 64) {
       Branch b = stack[--top];
       if (b.w < 1e-4f) continue;
       float t;
       float3 n;
-      bool hit = mesh_hit(bvh, b.o, b.d, 0.0f, INFINITY, &t, &n);  // origins sit off the surface
+      bool hit = mesh_hit(bvh, b.o, b.d, b.tmin, INFINITY, &t, &n);
       if (!hit) continue;  // no crossing ahead: outside the mesh, leaving the scene
       bool inside = dot(b.d, n) > 0.0f;  // the crossing ahead leaves the mesh
       if (inside) {
@@ -143,19 +144,19 @@ __kernel void single_march(float3 origin, float voxel, int nx, int ny, int nz,
         b.w *= tr;
       }
       float3 p = b.o + b.d * t;
+      float eps = surface_eps(bvh, p);
       if (inside) n = -n;  // face the incident side
       if (ior == 1.0f) {  // index matched: the ray crosses unchanged
-        if (top < 15) stack[top++] = (Branch){p - n * BOUNDARY_EPS, b.d, b.w};
+        if (top < 15) stack[top++] = (Branch){p, b.d, b.w, eps};
         continue;
       }
       if (top > 13) continue;
       float ct;
       float f = fresnel(-dot(b.d, n), inside ? ior : 1.0f / ior, &ct);
-      stack[top++] = (Branch){p + n * BOUNDARY_EPS, reflect_dir(b.d, n), b.w * f};
+      stack[top++] = (Branch){p, reflect_dir(b.d, n), b.w * f, eps};
       if (f < 1.0f)
-        stack[top++] = (Branch){p - n * BOUNDARY_EPS,
-                                refract_dir(b.d, n, inside ? ior : 1.0f / ior, ct),
-                                b.w * (1.0f - f)};
+        stack[top++] =
+            (Branch){p, refract_dir(b.d, n, inside ? ior : 1.0f / ior, ct), b.w * (1.0f - f), eps};
     }
   }
   size_t i = 3 * ((size_t)y * width + x);
