@@ -1,6 +1,6 @@
 // Spectral delta tracking, exact and ratio-tracked transmittance in the voxel medium with
-// per-brick majorants, all three colour channels at once; after rng.cl and dda.cl. Part of the kernels' shared library
-// (pipelines/common/cl_library.hpp).
+// per-brick majorants, all three colour channels at once; after rng.cl and dda.cl. Part of the
+// kernels' shared library (pipelines/common/cl_library.hpp).
 //
 // One path carries the three channels with per-channel weights (Kutz et al. 2017, "Spectral and
 // decomposition tracking"; as pbrt-v4's SampledSpectrum majorant tracking with one majorant for
