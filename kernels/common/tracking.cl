@@ -1,7 +1,27 @@
-// Delta and ratio tracking in the voxel medium with per-brick majorants; after rng.cl and dda.cl.
-// Part of the kernels' shared library (pipelines/common/cl_library.hpp).
+// Spectral delta tracking, exact and ratio-tracked transmittance in the voxel medium with
+// per-brick majorants, all three colour channels at once; after rng.cl and dda.cl. Part of the
+// kernels' shared library (pipelines/common/cl_library.hpp).
+//
+// One path carries the three channels with per-channel weights (Kutz et al. 2017, "Spectral and
+// decomposition tracking"; as pbrt-v4's SampledSpectrum majorant tracking with one majorant for
+// all wavelengths). The majorant m of a brick bounds every channel's sigma_t, so the tentative
+// collisions are common to the channels; at each one the path takes the real collision with
+// probability P = sum_c w_c sigma_t,c / (m sum_c w_c) (the history-aware average) and multiplies
+// each weight by sigma_s,c / (m P), or goes on as a null collision with weights times
+// sigma_n,c / (m (1 - P)), sigma_n = m - sigma_t. Each channel's expectation is delta tracking's
+// with absorption as a weight: unbiased for every channel, and for a grey medium exactly the
+// one-channel tracker (P = sigma_t / m, weights times the albedo at real collisions only).
 
 // ---- Tracking in the voxel medium with per-brick majorants -----------------------------------
+
+float3 voxel_sigma3(const Grid* g, __global const float* sigma, int3 c) {
+  if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= g->nx || c.y >= g->ny || c.z >= g->nz)
+    return (float3)(0.0f);
+  __global const float* p = sigma + 3 * voxel_index(g, c.x, c.y, c.z);
+  return (float3)(p[0], p[1], p[2]);
+}
+
+float max3(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
 
 // Starts a walk over the bricks crossed by o + t d, t < tmax; false if the ray misses the grid.
 bool brick_walk(const Grid* g, float3 o, float3 d, float tmax, Dda* s) {
@@ -14,9 +34,9 @@ bool brick_walk(const Grid* g, float3 o, float3 d, float tmax, Dda* s) {
 }
 
 // A brick whose majorant would draw more than this many tentative collisions per voxel the ray
-// crosses there is walked voxel by voxel instead, each voxel's own sigma being an exact majorant:
-// a brick that holds a dense blocker (sigma up to 1e6) beside a thin medium would otherwise take
-// majorant / sigma null collisions per real one (seconds per pixel).
+// crosses there is walked voxel by voxel instead, each voxel's own largest sigma being its
+// majorant: a brick that holds a dense blocker (sigma up to 1e6) beside a thin medium would
+// otherwise take majorant / sigma null collisions per real one (seconds per pixel).
 #define VOXEL_WALK_RATIO 1.0f
 
 // Whether segment [a, b] of a brick with majorant m is walked voxel by voxel.
@@ -31,11 +51,27 @@ float next_tentative(float t, float m, float b, Rng* r) {
   return tn > t && tn < b ? tn : b;
 }
 
-// Delta tracking: the first real collision along o + t d, t < tmax, for `channel`. Empty bricks
-// are stepped over; within a brick, tentative collisions are drawn with the brick's majorant, or
-// (walk_voxels) exactly per voxel.
-bool delta_track(const Grid* g, __global const float* sigma_t, __global const float* majorant,
-                 int channel, float3 o, float3 d, float tmax, Rng* r, float* t_hit) {
+// A tentative collision at majorant m where the medium has sigma_s ss and sigma_t st: true (and
+// the weights of a real collision) or false (those of a null one), as in the header.
+bool spectral_collide(float m, float3 ss, float3 st, float3* w, Rng* r) {
+  float3 sn = fmax(m - st, (float3)(0.0f));
+  float real = dot(*w, st), null = dot(*w, sn);
+  if (real <= 0.0f) return false;  // no channel can collide here: a null collision, weights kept
+  float p = real / (real + null);
+  if (rng_uniform(r) < p) {
+    *w *= ss / (m * p);
+    return true;
+  }
+  *w *= sn / (m * (1.0f - p));
+  return false;
+}
+
+// Spectral delta tracking: the first real collision along o + t d, t < tmax; *w takes the
+// collisions' weights (header). Empty bricks are stepped over; within a brick, tentative
+// collisions are drawn at the brick's majorant or (walk_voxels) at each voxel's largest sigma_t.
+bool delta_track(const Grid* g, __global const float* sigma_s, __global const float* sigma_t,
+                 __global const float* majorant, float3 o, float3 d, float tmax, float3* w,
+                 Rng* r, float* t_hit) {
   Dda s;
   if (!brick_walk(g, o, d, tmax, &s)) return false;
   float a, b;
@@ -49,19 +85,21 @@ bool delta_track(const Grid* g, __global const float* sigma_t, __global const fl
       float va, vb;
       int3 vc;
       while (dda_next(&v, &va, &vb, &vc)) {
-        float sig = voxel_sigma(g, sigma_t, vc, channel);
-        if (sig <= 0.0f) continue;
-        float t = va - log(1.0f - rng_uniform(r)) / sig;
-        if (t < vb) {
-          *t_hit = t;
-          return true;
-        }
+        float3 st = voxel_sigma3(g, sigma_t, vc);
+        float mv = max3(st);
+        if (mv <= 0.0f) continue;
+        float3 ss = voxel_sigma3(g, sigma_s, vc);
+        for (float t = next_tentative(va, mv, vb, r); t < vb; t = next_tentative(t, mv, vb, r))
+          if (spectral_collide(mv, ss, st, w, r)) {
+            *t_hit = t;
+            return true;
+          }
       }
       continue;
     }
     for (float t = next_tentative(a, m, b, r); t < b; t = next_tentative(t, m, b, r)) {
-      float sig = voxel_sigma(g, sigma_t, voxel_of(g, o + d * t), channel);
-      if (rng_uniform(r) * m < sig) {
+      int3 vc = voxel_of(g, o + d * t);
+      if (spectral_collide(m, voxel_sigma3(g, sigma_s, vc), voxel_sigma3(g, sigma_t, vc), w, r)) {
         *t_hit = t;
         return true;
       }
@@ -70,14 +108,39 @@ bool delta_track(const Grid* g, __global const float* sigma_t, __global const fl
   return false;
 }
 
-// Ratio tracking: an unbiased estimate of the transmittance along o + t d, t in [0, tmax], with
-// Russian roulette once it is small so dense media end early. A brick walked voxel by voxel
-// (walk_voxels) contributes its exact transmittance.
-float ratio_track(const Grid* g, __global const float* sigma_t, __global const float* majorant,
-                  int channel, float3 o, float3 d, float tmax, Rng* r) {
+// The exact transmittance of the three channels along o + t d, t in [0, tmax]: the optical depth
+// summed voxel by voxel (each voxel is constant), walking only the bricks that hold any medium. No
+// randomness: a shadow ray's transmittance without the variance of ratio tracking, whose estimate
+// where the majorant is tight (a homogeneous medium) is 0 or 1.
+float3 exact_transmittance(const Grid* g, __global const float* sigma_t,
+                           __global const float* majorant, float3 o, float3 d, float tmax) {
   Dda s;
-  if (!brick_walk(g, o, d, tmax, &s)) return 1.0f;
-  float tr = 1.0f, a, b;
+  if (!brick_walk(g, o, d, tmax, &s)) return (float3)(1.0f);
+  float3 tau = (float3)(0.0f);
+  float a, b;
+  int3 c;
+  while (dda_next(&s, &a, &b, &c)) {
+    if (majorant[(c.z * g->by + c.y) * g->bx + c.x] <= 0.0f) continue;
+    Dda v;
+    dda_init(&v, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), a, b);
+    float va, vb;
+    int3 vc;
+    while (dda_next(&v, &va, &vb, &vc)) tau += voxel_sigma3(g, sigma_t, vc) * (vb - va);
+    if (max3(-tau) < -80.0f) return (float3)(0.0f);  // below float32's range in every channel
+  }
+  return exp(-tau);
+}
+
+// Ratio tracking of the three channels at once: an unbiased estimate of each channel's
+// transmittance along o + t d, t in [0, tmax], with Russian roulette once the largest is small so
+// dense media end early. A brick walked voxel by voxel (walk_voxels) contributes its exact
+// transmittance.
+float3 ratio_track(const Grid* g, __global const float* sigma_t, __global const float* majorant,
+                   float3 o, float3 d, float tmax, Rng* r) {
+  Dda s;
+  float3 tr = (float3)(1.0f);
+  if (!brick_walk(g, o, d, tmax, &s)) return tr;
+  float a, b;
   int3 c;
   while (dda_next(&s, &a, &b, &c)) {
     float m = majorant[(c.z * g->by + c.y) * g->bx + c.x];
@@ -85,16 +148,18 @@ float ratio_track(const Grid* g, __global const float* sigma_t, __global const f
     if (walk_voxels(g, m, a, b)) {
       Dda v;
       dda_init(&v, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), a, b);
-      float va, vb, tau = 0.0f;
+      float va, vb;
+      float3 tau = (float3)(0.0f);
       int3 vc;
-      while (dda_next(&v, &va, &vb, &vc)) tau += voxel_sigma(g, sigma_t, vc, channel) * (vb - va);
+      while (dda_next(&v, &va, &vb, &vc)) tau += voxel_sigma3(g, sigma_t, vc) * (vb - va);
       tr *= exp(-tau);
     } else {
       for (float t = next_tentative(a, m, b, r); t < b; t = next_tentative(t, m, b, r))
-        tr *= 1.0f - voxel_sigma(g, sigma_t, voxel_of(g, o + d * t), channel) / m;
+        tr *= fmax(1.0f - voxel_sigma3(g, sigma_t, voxel_of(g, o + d * t)) / m, (float3)(0.0f));
     }
-    if (tr < 0.01f) {
-      if (tr <= 0.0f || rng_uniform(r) >= 0.5f) return 0.0f;
+    float top = max3(tr);
+    if (top < 0.01f) {
+      if (top <= 0.0f || rng_uniform(r) >= 0.5f) return (float3)(0.0f);
       tr *= 2.0f;
     }
   }

@@ -1,32 +1,48 @@
-// Monte Carlo volumetric path tracer: delta tracking in the voxel medium with per-brick majorants,
-// next-event estimation to every light with ratio-tracked shadow rays, Henyey-Greenstein
-// sampling, Russian roulette on the path weight. Sample s follows colour channel s mod 3 only, so
-// chromatic media need no spectral majorants; the host divides each channel by its own count.
+// Monte Carlo volumetric path tracer: spectral delta tracking in the voxel medium with per-brick
+// majorants (kernels/common/tracking.cl: every path carries the three colour channels with their
+// own weights), next-event estimation to every light with shadow rays whose transmittance is
+// exact (summed voxel by voxel), Henyey-Greenstein sampling, Russian roulette on the path's
+// largest weight.
 //
-// With ior != 1 the mesh is a dielectric boundary: paths reflect or refract at it with Fresnel's
-// probabilities (total internal reflection included), tracking inside stops at the surface, and
-// shadow rays carry the Fresnel transmittance of their crossings (see boundary.cl).
+// The medium is the density grid inside the mesh (boundary.cl): tracking stops at every mesh
+// crossing, and a segment is tracked only if it lies inside. With ior != 1 the mesh is also a
+// dielectric boundary: paths reflect or refract at it with Fresnel's probabilities (total internal
+// reflection included) and shadow rays carry the Fresnel transmittance of their crossings.
 //
 // terms: bit 0 adds light scattered once (NEE at the first vertex), bit 1 light scattered more
-// than once. Each launch adds `spp` samples per pixel to sum and sum_sq of their channel, from
-// which the host takes the mean and its standard error per channel. sum_sq holds the squares
-// times `sq_scale` (the inverse of the lights' largest power): a square in float32 overflows
-// past radiance 1.8e19 (a 1e12 light of colour 1e6) and underflows below 1e-19 (a 1e-12 light of
+// than once. Each launch adds `spp` samples per pixel to sum and sum_sq (three channels each),
+// from which the host takes the mean and its standard error. sum_sq holds the squares times
+// `sq_scale` (the inverse of the lights' largest power): a square in float32 overflows past
+// radiance 1.8e19 (a 1e12 light of colour 1e6) and underflows below 1e-19 (a 1e-12 light of
 // colour 1e-12), while radiance over power keeps to the geometry's range.
 
-// Light arriving at x and scattered into -d, for one channel: sum over the lights.
-float next_event(const Grid* g, __global const float* sigma_t, __global const float* majorant,
-                 __global const float* lights, int light_count, float g_phase, int ch, float3 x,
-                 float3 d, Bvh bvh, float ior, Rng* r) {
-  float sum = 0.0f;
+float3 light_irradiance3(Light L, float3 x, float3* wl, float* dist) {
+  return (float3)(light_irradiance(L, x, 0, wl, dist), light_irradiance(L, x, 1, wl, dist),
+                  light_irradiance(L, x, 2, wl, dist));
+}
+
+// Light arriving at x and scattered into -d, per channel: sum over the lights.
+float3 next_event(const Grid* g, __global const float* sigma_t, __global const float* majorant,
+                  __global const float* lights, int light_count, float g_phase, float3 x, float3 d,
+                  Bvh bvh, float ior, bool use_mesh, bool convex, float interior, Rng* r) {
+  float3 sum = (float3)(0.0f);
   for (int l = 0; l < light_count; ++l) {
     float3 wl;
     float dist;
-    float e = light_irradiance(load_light(lights, l), x, ch, &wl, &dist);
-    if (e <= 0.0f) continue;
-    if (ior != 1.0f) e *= boundary_transmittance(bvh, ior, x, wl, dist);
-    if (e <= 0.0f) continue;
-    sum += e * ratio_track(g, sigma_t, majorant, ch, x, wl, dist, r) * hg_phase(dot(wl, d), g_phase);
+    float3 e = light_irradiance3(load_light(lights, l), x, &wl, &dist);
+    if (max3(e) <= 0.0f) continue;
+    if (!use_mesh) {
+      e *= exact_transmittance(g, sigma_t, majorant, x, wl, dist);
+    } else {
+      // Within `interior` of x there is no boundary: track that far without the mesh.
+      float s = fmin(interior, dist);
+      if (s > 0.0f) e *= exact_transmittance(g, sigma_t, majorant, x, wl, s);
+      if (s < dist && max3(e) > 0.0f)
+        e *= shadow_transmittance(g, sigma_t, majorant, bvh, ior, convex, x + wl * s, wl,
+                                  dist - s, r);
+    }
+    if (max3(e) <= 0.0f) continue;
+    sum += e * hg_phase(dot(wl, d), g_phase);
   }
   return sum;
 }
@@ -37,74 +53,95 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
                          __global const float* lights, int light_count, float g_phase,
                          __global const float* camera, int width, int height, int terms,
                          int spp, int first_sample, uint seed, int max_depth, float ior,
+                         int use_mesh, int convex, __global const uchar* interior,
                          __global const float* bvh_bounds, __global const int* bvh_links,
                          __global const float* bvh_tris, float sq_scale, __global float* sum,
                          __global float* sum_sq) {
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
   Grid g = make_grid(origin, voxel, nx, ny, nz, brick, bx, by, bz);
-  Bvh bvh = {bvh_bounds, bvh_links, bvh_tris};
-  const bool dielectric = ior != 1.0f;
+  Bvh bvh = {bvh_bounds, bvh_links, bvh_tris, 1e-3f * voxel};
   Cam cam = load_camera(camera);
   float3 d0 = camera_ray(cam, x, y, width, height, 0.5f, 0.5f);
-  float acc[3] = {0, 0, 0}, acc2[3] = {0, 0, 0};
+  float3 acc = (float3)(0.0f), acc2 = (float3)(0.0f);
   for (int s = 0; s < spp; ++s) {
     int sample = first_sample + s;
-    int ch = sample % 3;
     Rng r = rng_seed((uint)(y * width + x), (uint)sample, seed);
     float3 o = cam.position, d = d0;
-    float weight = 1.0f, value = 0.0f;
-    bool inside = !dielectric;  // index matched: no boundary, the medium is everywhere it is
+    float3 weight = (float3)(1.0f), value = (float3)(0.0f);
     int depth = 0;
+    float safe = 0.0f;  // at a vertex: how far the medium has no boundary
+    float tmin = 0.0f;  // at a crossing: where the next search starts (surface_eps)
     for (int events = 0; events < 4 * max_depth + 64; ++events) {
-      float t_surface = INFINITY;
+      float t_surface = INFINITY, t;
       float3 n;
-      // From a point in the volume any crossing counts (tmin 0); after a surface event the origin was
-      // already moved off the surface along its normal.
-      bool hit = dielectric && mesh_hit(bvh, o, d, 0.0f, INFINITY, &t_surface, &n);
-      float t;
-      if (inside && delta_track(&g, sigma_t, majorant, ch, o, d, t_surface, &r, &t)) {
-        // A real collision: absorb part of the weight, add light scattered here, scatter on.
+      bool hit = false, inside = true;
+      // Within `safe` the flight needs no mesh; past it, the flight goes on from there.
+      bool collided = safe > 0.0f &&
+                      delta_track(&g, sigma_s, sigma_t, majorant, o, d, safe, &weight, &r, &t);
+      if (!collided) {
+        o = o + d * safe;
+        // From a point in the volume any crossing counts (tmin 0); after a surface event the
+        // path leaves from the crossing itself and skips surface_eps of search. Without the mesh
+        // (voxel_boundary, index matched) the medium is the grid alone.
+        hit = use_mesh && mesh_hit(bvh, o, d, tmin, INFINITY, &t_surface, &n);
+        if (use_mesh && !hit) break;  // a ray with no crossing ahead is outside the mesh
+        // Inside iff the crossing ahead leaves the mesh.
+        inside = !use_mesh || dot(d, n) > 0.0f;
+        collided = inside && delta_track(&g, sigma_s, sigma_t, majorant, o, d, t_surface,
+                                         &weight, &r, &t);
+      }
+      safe = 0.0f;
+      tmin = 0.0f;
+      if (collided) {
+        // A real collision (weights already scaled by the albedo): add light scattered here,
+        // scatter on.
         o = o + d * t;
-        int3 vc = voxel_of(&g, o);
-        int v = 3 * voxel_index(&g, vc.x, vc.y, vc.z) + ch;
-        float st = sigma_t[v];
-        weight *= st > 0.0f ? sigma_s[v] / st : 0.0f;
-        if (weight <= 0.0f || ++depth > max_depth) break;
+        if (use_mesh) safe = interior_distance(&g, interior, o);
+        if (max3(weight) <= 0.0f || ++depth > max_depth) break;
         if ((depth == 1 && (terms & 1)) || (depth > 1 && (terms & 2)))
-          value += weight * next_event(&g, sigma_t, majorant, lights, light_count, g_phase, ch, o,
-                                       d, bvh, ior, &r);
+          value += weight * next_event(&g, sigma_t, majorant, lights, light_count, g_phase, o, d,
+                                       bvh, ior, use_mesh, convex, safe, &r);
         if (!(terms & 2)) break;  // single scattering only: the path ends at its first vertex
         d = hg_sample(d, g_phase, &r);
-        if (depth >= 3 && weight < 0.25f) {  // Russian roulette on the path weight
-          float q = fmax(weight, 0.05f);
+        float top = max3(weight);
+        if (depth >= 3 && top < 0.25f) {  // Russian roulette on the largest channel's weight
+          float q = fmax(top, 0.05f);
           if (rng_uniform(&r) >= q) break;
           weight /= q;
         }
         continue;
       }
-      if (!hit) break;  // leaves the scene
-      // The surface: reflect or refract with Fresnel's probabilities.
+      if (!hit || max3(weight) <= 0.0f) break;
       float3 p = o + d * t_surface;
-      if (dot(d, n) > 0.0f) n = -n;  // face the incident side
+      if (inside) n = -n;  // face the incident side
+      if (ior == 1.0f) {  // index matched: the path crosses unchanged
+        if (convex && inside) break;  // out of a convex mesh for good
+        o = p;
+        tmin = surface_eps(bvh, p);
+        continue;
+      }
+      // A dielectric surface: reflect or refract with Fresnel's probabilities.
       float ct;
       float eta = inside ? ior : 1.0f / ior;
       float f = fresnel(-dot(d, n), eta, &ct);
       if (rng_uniform(&r) < f) {
         d = reflect_dir(d, n);
-        o = p + n * BOUNDARY_EPS;
       } else {
+        if (convex && inside) break;  // out of a convex mesh for good
         d = refract_dir(d, n, eta, ct);
-        o = p - n * BOUNDARY_EPS;
-        inside = !inside;
       }
+      o = p;
+      tmin = surface_eps(bvh, p);
     }
-    acc[ch] += value;
-    acc2[ch] += (value * sq_scale) * value;
+    acc += value;
+    acc2 += (value * sq_scale) * value;
   }
   size_t i = 3 * ((size_t)y * width + x);
-  for (int c = 0; c < 3; ++c) {
-    sum[i + c] += acc[c];
-    sum_sq[i + c] += acc2[c];
-  }
+  sum[i] += acc.x;
+  sum[i + 1] += acc.y;
+  sum[i + 2] += acc.z;
+  sum_sq[i] += acc2.x;
+  sum_sq[i + 1] += acc2.y;
+  sum_sq[i + 2] += acc2.z;
 }

@@ -4,24 +4,27 @@
 // light optical depth linear across it (march_segment); the light's optical depth is exact
 // through the voxels at the sub-steps' ends. Converges as step -> 0.
 //
-// With a dielectric boundary (ior != 1) the view ray is split at every surface crossing into its
-// reflected and refracted parts, weighted by Fresnel, and each part inside the medium is marched
-// up to the surface (a small stack, until the weight is negligible); light reaches a point inside
-// along a straight shadow ray weighted by the Fresnel transmittance of the crossings.
+// The medium is the density grid inside the mesh (boundary.cl): the view ray is marched only over
+// its segments inside, up to each crossing, and the light's optical depth sums the parts of the
+// shadow ray inside. With a dielectric boundary (ior != 1) the view ray is split at every surface
+// crossing into its reflected and refracted parts, weighted by Fresnel (a small stack, until the
+// weight is negligible); light reaches a point inside along a straight shadow ray weighted by the
+// Fresnel transmittance of the crossings.
 
 // Light reaching p from light l, scattered into -d, before the medium's attenuation (*tau: the
 // optical depth towards the light).
 float unattenuated(const Grid* g, __global const float* sigma_t, __global const float* lights,
                    int l, float g_phase, int ch, float3 p, float3 d, Bvh bvh, float ior,
-                   float* tau) {
+                   bool use_mesh, float* tau) {
   float3 wl;
   float dist;
   float e = light_irradiance(load_light(lights, l), p, ch, &wl, &dist);
   *tau = 0.0f;
   if (e <= 0.0f) return 0.0f;
-  *tau = optical_depth(g, sigma_t, ch, p, wl, 0.0f, dist);
-  if (ior != 1.0f) e *= boundary_transmittance(bvh, ior, p, wl, dist);
-  return e * hg_phase(dot(wl, d), g_phase);
+  float fresnel_tr = 1.0f;
+  *tau = use_mesh ? shadow_depth(g, sigma_t, ch, bvh, ior, p, wl, dist, &fresnel_tr)
+                  : optical_depth(g, sigma_t, ch, p, wl, 0.0f, dist);
+  return e * fresnel_tr * hg_phase(dot(wl, d), g_phase);
 }
 
 // The mean of exp(-f) over an interval on which f rises linearly from a to b:
@@ -46,7 +49,7 @@ float exp_mean(float a, float b) {
 float march_segment(const Grid* g, __global const float* sigma_s, __global const float* sigma_t,
                     __global const float* lights, int light_count, float g_phase, int ch,
                     float3 o, float3 d, float t0, float t1, float step, Bvh bvh, float ior,
-                    float* tr_end) {
+                    bool use_mesh, float* tr_end) {
   float a0, a1;
   *tr_end = 1.0f;
   if (!grid_interval(g, o, d, &a0, &a1)) return 0.0f;
@@ -68,7 +71,7 @@ float march_segment(const Grid* g, __global const float* sigma_s, __global const
     float seg_tr = exp(-st * h);
     for (int l = 0; l < light_count; ++l)
       e0[l] = unattenuated(g, sigma_t, lights, l, g_phase, ch, o + d * (a + FACE_INSET * h), d,
-                           bvh, ior, &tau0[l]);
+                           bvh, ior, use_mesh, &tau0[l]);
     for (int k = 0; k < n && tr > 1e-7f; ++k) {
       // The ends' offsets in the sub-step: [u0, u1] within [0, h].
       float u0 = k == 0 ? FACE_INSET * h : 0.0f, u1 = k == n - 1 ? (1.0f - FACE_INSET) * h : h;
@@ -76,7 +79,8 @@ float march_segment(const Grid* g, __global const float* sigma_s, __global const
       float in_scatter = 0.0f;
       for (int l = 0; l < light_count; ++l) {
         float tau1;
-        float e1 = unattenuated(g, sigma_t, lights, l, g_phase, ch, p1, d, bvh, ior, &tau1);
+        float e1 =
+            unattenuated(g, sigma_t, lights, l, g_phase, ch, p1, d, bvh, ior, use_mesh, &tau1);
         if (e0[l] > 0.0f || e1 > 0.0f) {
           // The light's depth, linear through the two ends, at the sub-step's start and its slope.
           // (An optical depth is never negative: where the light's depth is far from linear, a
@@ -99,54 +103,60 @@ float march_segment(const Grid* g, __global const float* sigma_s, __global const
 typedef struct {
   float3 o, d;
   float w;
-  int inside;
+  float tmin;  // where the search for the next crossing starts (surface_eps past one)
 } Branch;
 
 __kernel void single_march(float3 origin, float voxel, int nx, int ny, int nz,
                            __global const float* sigma_s, __global const float* sigma_t,
                            __global const float* lights, int light_count, float g_phase,
                            __global const float* camera, int width, int height, float step,
-                           float ior, __global const float* bvh_bounds,
+                           float ior, int use_mesh, __global const float* bvh_bounds,
                            __global const int* bvh_links, __global const float* bvh_tris,
                            __global float* out) {
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
   Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);  // no bricks: the marcher walks voxels
-  Bvh bvh = {bvh_bounds, bvh_links, bvh_tris};
+  Bvh bvh = {bvh_bounds, bvh_links, bvh_tris, 1e-3f * voxel};
   Cam cam = load_camera(camera);
   float3 d0 = camera_ray(cam, x, y, width, height, 0.5f, 0.5f);
   float result[3] = {0.0f, 0.0f, 0.0f};
   for (int ch = 0; ch < 3; ++ch) {
     float tr;
-    if (ior == 1.0f) {
+    if (!use_mesh) {  // voxel_boundary, index matched: the grid alone along the whole ray
       result[ch] = march_segment(&g, sigma_s, sigma_t, lights, light_count, g_phase, ch,
-                                 cam.position, d0, 0.0f, INFINITY, step, bvh, ior, &tr);
+                                 cam.position, d0, 0.0f, INFINITY, step, bvh, ior, false, &tr);
       continue;
     }
     Branch stack[16];
     int top = 0, segments = 0;
-    stack[top++] = (Branch){cam.position, d0, 1.0f, 0};
+    stack[top++] = (Branch){cam.position, d0, 1.0f, 0.0f};
     while (top > 0 && segments++ < 64) {
       Branch b = stack[--top];
       if (b.w < 1e-4f) continue;
       float t;
       float3 n;
-      bool hit = mesh_hit(bvh, b.o, b.d, 0.0f, INFINITY, &t, &n);  // origins sit off the surface
-      if (b.inside) {
+      bool hit = mesh_hit(bvh, b.o, b.d, b.tmin, INFINITY, &t, &n);
+      if (!hit) continue;  // no crossing ahead: outside the mesh, leaving the scene
+      bool inside = dot(b.d, n) > 0.0f;  // the crossing ahead leaves the mesh
+      if (inside) {
         result[ch] += b.w * march_segment(&g, sigma_s, sigma_t, lights, light_count, g_phase, ch,
-                                          b.o, b.d, 0.0f, hit ? t : INFINITY, step, bvh, ior, &tr);
+                                          b.o, b.d, 0.0f, t, step, bvh, ior, true, &tr);
         b.w *= tr;
       }
-      if (!hit || top > 13) continue;
       float3 p = b.o + b.d * t;
-      if (dot(b.d, n) > 0.0f) n = -n;  // face the incident side
+      float eps = surface_eps(bvh, p);
+      if (inside) n = -n;  // face the incident side
+      if (ior == 1.0f) {  // index matched: the ray crosses unchanged
+        if (top < 15) stack[top++] = (Branch){p, b.d, b.w, eps};
+        continue;
+      }
+      if (top > 13) continue;
       float ct;
-      float f = fresnel(-dot(b.d, n), b.inside ? ior : 1.0f / ior, &ct);
-      stack[top++] = (Branch){p + n * BOUNDARY_EPS, reflect_dir(b.d, n), b.w * f, b.inside};
+      float f = fresnel(-dot(b.d, n), inside ? ior : 1.0f / ior, &ct);
+      stack[top++] = (Branch){p, reflect_dir(b.d, n), b.w * f, eps};
       if (f < 1.0f)
-        stack[top++] = (Branch){p - n * BOUNDARY_EPS,
-                                refract_dir(b.d, n, b.inside ? ior : 1.0f / ior, ct),
-                                b.w * (1.0f - f), !b.inside};
+        stack[top++] =
+            (Branch){p, refract_dir(b.d, n, inside ? ior : 1.0f / ior, ct), b.w * (1.0f - f), eps};
     }
   }
   size_t i = 3 * ((size_t)y * width + x);

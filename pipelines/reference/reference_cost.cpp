@@ -28,11 +28,13 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
              std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px x " +
                  (march ? "12" : "72") + " B");
   frame.device("scene.image.width", px * (march ? 12 : 24), "the image's device buffers");
-  if (scene.medium.ior != 1.0) {
-    // FlatBvh (scene/bvh.hpp) on the host and its three buffers: ~2 nodes and 9 floats a triangle.
+  if (scene.medium.ior != 1.0 || !s.voxel_boundary) {
+    // FlatBvh (scene/bvh.hpp) on the host and its three buffers: ~2 nodes and 9 floats a triangle
+    // (the mesh bounds the medium); the interior depth, a byte a voxel, and the convexity check's
+    // edge map.
     double tris = double(scene.mesh->triangle_count());
-    frame.host("scene.mesh", tris * 100, "BVH");
-    frame.device("scene.mesh", tris * 100, "BVH buffers");
+    frame.host("scene.mesh", tris * 100 + n + tris * 3 * 48, "BVH, interior depth, edge map");
+    frame.device("scene.mesh", tris * 100 + n, "BVH buffers, interior depth");
   }
 
   const double lights = std::max<size_t>(scene.lights.size(), 1), covered = px * coverage(scene);

@@ -7,7 +7,7 @@ namespace scatter {
 const SettingsTable<ReferenceSettings>& reference_settings() {
   static const SettingsTable<ReferenceSettings> table(
       "reference", {setting("spp", &ReferenceSettings::spp, 3, 1 << 20, frame(),
-                            "samples per pixel (one colour channel per sample: 3 for a colour)"),
+                            "samples per pixel (each carries the three colour channels)"),
                     setting("step", &ReferenceSettings::step, 1e-3, 4, frame(),
                             "the single-scatter marcher's sub-step, in voxels"),
                     setting("seed", &ReferenceSettings::seed, 0, 1 << 30, frame(),
@@ -16,7 +16,11 @@ const SettingsTable<ReferenceSettings>& reference_settings() {
                             "scattering events per path, at most"),
                     flag("mc", &ReferenceSettings::mc, frame(),
                          "1: the single term by Monte Carlo (next-event estimation at the first "
-                         "vertex) instead of marching")});
+                         "vertex) instead of marching"),
+                    flag("voxel_boundary", &ReferenceSettings::voxel_boundary, frame(),
+                         "1: with ior 1, the voxelized medium alone (each voxel's mean over its "
+                         "whole volume: the staircase other pipelines see at the same grid) "
+                         "instead of the density grid bounded by the mesh")});
   return table;
 }
 

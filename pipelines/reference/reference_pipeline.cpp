@@ -8,6 +8,8 @@
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/common/stage_clock.hpp"
 #include "pipelines/metrics.hpp"
+#include "pipelines/reference/convex.hpp"
+#include "pipelines/reference/inside_grid.hpp"
 #include "scene/bvh.hpp"
 
 namespace scatter {
@@ -25,13 +27,12 @@ bool marches(const ReferenceSettings& s, Terms terms) {
   return terms == Terms::Single && !s.mc;
 }
 
-// Mean and standard error of the mean from per-sample sums; sample s went to channel s mod 3, so
-// channel c has its own count. sum_sq holds the squares times sq_scale.
+// Mean and standard error of the mean from per-sample sums (every sample carries the three
+// channels). sum_sq holds the squares times sq_scale.
 void finish_estimate(const std::vector<float>& sum, const std::vector<float>& sum_sq, int spp,
                      double sq_scale, Image& mean, Image& std_error) {
   for (size_t i = 0; i < sum.size(); ++i) {
-    int c = static_cast<int>(i % 3);
-    double n = (spp - c + 2) / 3;  // samples s < spp with s % 3 == c
+    double n = spp;
     double m = sum[i] / n;
     double var = std::max(0.0, sum_sq[i] / sq_scale / n - m * m) * n / std::max(1.0, n - 1);
     mean.rgb[i] = static_cast<float>(m);
@@ -60,14 +61,22 @@ Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
 Plan ReferencePipeline::describe(const Scene& scene, Terms terms,
                                  const ReferenceSettings& s) const {
   Plan p{name(), terms, {}};
-  p.stages.push_back({"voxelize", true, std::to_string(scene.voxels) + " voxels on the long side"});
+  p.stages.push_back({"voxelize", true,
+                      std::to_string(scene.voxels) + " voxels on the long side" +
+                          (s.voxel_boundary ? "" : ": the density inside the mesh, per voxel")});
+  const std::string bounds = s.voxel_boundary ? "" : ", which bounds the medium,";
   if (scene.medium.ior != 1.0)
     p.stages.push_back({"boundary", true,
-                        "ior " + std::to_string(scene.medium.ior) +
-                            ": BVH over the mesh for Fresnel and refraction; "
-                            "shadow rays are not refracted (approximate)"});
+                        "ior " + std::to_string(scene.medium.ior) + ": BVH over the mesh" + bounds +
+                            " for Fresnel and refraction; shadow rays are not refracted "
+                            "(approximate)"});
+  else if (!s.voxel_boundary)
+    p.stages.push_back({"boundary", true,
+                        "BVH over the mesh, which bounds the medium; index matched (ior 1): no "
+                        "reflection or refraction"});
   else
-    p.stages.push_back({"boundary", false, "index matched (ior 1): no reflection or refraction"});
+    p.stages.push_back({"boundary", false,
+                        "voxel_boundary=1 and index matched (ior 1): the voxelized medium alone"});
   p.stages.push_back({"upload", true, "medium, per-brick majorants (8^3 voxels), lights, camera"});
   if (marches(s, terms)) {
     p.stages.push_back(
@@ -92,10 +101,14 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   result.plan = describe(scene, request.terms, s);
   StageClock clock(result.timings);
   VoxelGrid grid = voxelize(scene, {.resolution = scene.voxels});
-  clock.stop("voxelize");
   const bool dielectric = scene.medium.ior != 1.0;
+  // The mesh bounds the medium (kernels/reference/boundary.cl), index matched or not, unless
+  // voxel_boundary asks for the voxelized medium alone (then only a dielectric needs the mesh).
+  const bool mesh_bounds = !s.voxel_boundary;
+  if (mesh_bounds) restrict_to_mesh(grid);
+  clock.stop("voxelize");
   FlatBvh bvh;
-  if (dielectric) {
+  if (mesh_bounds || dielectric) {
     bvh = build_bvh(*scene.mesh);
     clock.stop("boundary");
   }
@@ -109,6 +122,12 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     cl.queue().enqueueWriteBuffer(bvh_links, CL_TRUE, 0, bvh.links.size() * sizeof(int32_t),
                                   bvh.links.data());
   const float ior = static_cast<float>(scene.medium.ior);
+  // How far each voxel is from the boundary, and whether a path once out stays out.
+  std::vector<uint8_t> interior =
+      mesh_bounds ? interior_depth(grid) : std::vector<uint8_t>(grid.count(), 0);
+  cl::Buffer interior_buf(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, interior.size(),
+                          interior.data());
+  const int convex = (mesh_bounds || dielectric) && is_convex(*scene.mesh);
   ClMedium medium = upload_medium(cl, grid);
   cl::Buffer lights = upload(cl, pack_lights(scene.lights));
   cl::Buffer camera = upload(cl, pack_camera(scene.camera, scene.width, scene.height));
@@ -130,7 +149,7 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     cl::Kernel k(cl.program(program("kernels/reference/single_march.cl")), "single_march");
     gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz, medium.sigma_s,
                   medium.sigma_t, lights, light_count, g, camera, w, h, float(s.step), ior,
-                  bvh_bounds, bvh_links, bvh_tris, out);
+                  int(mesh_bounds || dielectric), bvh_bounds, bvh_links, bvh_tris, out);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     clock.stop("march");
@@ -149,7 +168,7 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   // Progressive passes of a few samples keep each launch short and let callers see progress.
   // With a budget (max_error), spp is the expected count: the passes go on until the relative
   // standard error is under the budget, checked every twelfth of the samples so far (whole
-  // rounds of the three channels), up to 8x spp.
+  // rounds of three), up to 8x spp.
   const int per_pass = std::min(s.spp, 4);
   const int cap = request.max_error ? std::min(8 * s.spp, 1 << 20) : s.spp;
   const double sq_scale = square_scale(scene);
@@ -168,8 +187,9 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz,
                   medium.bricks.brick, medium.bricks.bx, medium.bricks.by, medium.bricks.bz,
                   medium.sigma_s, medium.sigma_t, medium.majorant, lights, light_count, g, camera,
-                  w, h, terms, n, done, s.seed, s.max_depth, ior, bvh_bounds, bvh_links, bvh_tris,
-                  float(sq_scale), sum, sum_sq);
+                  w, h, terms, n, done, s.seed, s.max_depth, ior, int(mesh_bounds || dielectric),
+                  convex, interior_buf, bvh_bounds, bvh_links, bvh_tris, float(sq_scale), sum,
+                  sum_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     spp = done + n;

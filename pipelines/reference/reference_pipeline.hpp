@@ -1,5 +1,7 @@
-// `reference`: ground truth in OpenCL, for the voxelized medium (each voxel holds constant
-// sigma_s, sigma_a). With ior != 1 the mesh is a dielectric boundary (kernels/reference/
+// `reference`: ground truth in OpenCL: the medium is the density grid (each voxel holds constant
+// sigma_s, sigma_a: their mean over the voxel's part inside the mesh) bounded by the mesh exactly
+// (a BVH; voxel_boundary=1: the voxelized medium alone, the staircase the other pipelines see at
+// the same grid). With ior != 1 the mesh is also a dielectric boundary (kernels/reference/
 // boundary.cl): view rays and paths reflect and refract with Fresnel's weights; shadow rays to
 // the (point-like) lights go straight, weighted by the Fresnel transmittance of each crossing.
 //
@@ -22,6 +24,7 @@ struct ReferenceSettings {
   uint32_t seed = 1;
   int max_depth = 1024;
   bool mc = false;
+  bool voxel_boundary = false;
   static ReferenceSettings read(const Settings& settings);
 };
 

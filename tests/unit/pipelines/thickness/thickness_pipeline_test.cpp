@@ -39,20 +39,19 @@ TEST(ThicknessPipeline, AxisBoxMatchesClosedForm) {
 // Against the reference marcher on the homogeneous sphere. The reference sees the medium through
 // its voxels; the gap shrinks as they get finer, which shows it is the reference's voxelization
 // (and not the thickness path) that the remaining difference comes from.
-TEST(ThicknessPipeline, SphereApproachesTheReferenceAsItsVoxelsShrink) {
+// The reference bounds the medium by the mesh, as thickness does: they agree at every grid (the
+// voxel-bounded reference was 4 % off at 144 voxels and fell only as the staircase shrank).
+TEST(ThicknessPipeline, SphereAgreesWithTheReferenceAtEveryGrid) {
   Scene s = load_scene(test::source_path("scenes/sphere.json"));
   s.width = s.height = 64;
   Image thickness = render(ThicknessPipeline(test::shared_gpu()), s);
-  std::vector<double> errors;
-  for (int voxels : {48, 96, 144}) {
+  for (int voxels : {24, 48, 96}) {
     s.voxels = voxels;
     Image ref = render(ReferencePipeline(test::shared_gpu()), s);
-    errors.push_back(
-        relative_rmse(thickness, ref, coverage_mask(s, voxelize(s, {.resolution = voxels}))));
+    EXPECT_LT(relative_rmse(thickness, ref, coverage_mask(s, voxelize(s, {.resolution = voxels}))),
+              0.01)
+        << voxels << " voxels";
   }
-  EXPECT_LT(errors[1], errors[0]);
-  EXPECT_LT(errors[2], errors[1]);
-  EXPECT_LT(errors[2], 0.04);
 }
 
 TEST(ThicknessPipeline, RefusesWhatItCannotRender) {

@@ -1,0 +1,32 @@
+// The reference's medium: the density grid inside the mesh. The voxelizer stores each voxel's
+// coefficients averaged over the whole voxel (the medium's fraction times its mean density, plus a
+// blocker's absorption times its fraction); the reference bounds the medium by the mesh itself
+// (kernels/reference/boundary.cl), so it needs the mean over the voxel's part inside the mesh:
+// the coefficients over the occupancy. The values are piecewise constant (each voxel's own, no
+// trilinear interpolation). Voxels the mesh may still reach but that hold none of it (occupancy 0
+// next to an occupied voxel: a sliver the supersampling missed) take their occupied neighbours'
+// mean, so that the medium the mesh bounds has no holes.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "scene/voxelizer.hpp"
+
+namespace scatter {
+
+// In place: sigma_s and sigma_a become the means over each voxel's part inside the mesh.
+void restrict_to_mesh(VoxelGrid& grid);
+
+}  // namespace scatter
+
+namespace scatter {
+
+// Per voxel, how far the mesh is at least, in voxels: the Chebyshev distance to the nearest voxel
+// not wholly inside the mesh (occupancy < 1), less two (one for a sliver of surface in a voxel
+// counted full), capped at 255; 0 for the voxels the mesh
+// may cross. Within that many voxels of any point of the voxel the medium has no boundary, so a
+// free flight or shadow ray tracks that far without asking the mesh.
+std::vector<uint8_t> interior_depth(const VoxelGrid& grid);
+
+}  // namespace scatter
