@@ -2,9 +2,73 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
 #include "protocol/json_reader.hpp"
 
 namespace scatter::server {
+namespace {
+
+nlohmann::json vec_json(const Vec3& v) {
+  return nlohmann::json::array({v.x, v.y, v.z});
+}
+
+nlohmann::json light_json(const Light& l) {
+  static const char* kTypes[] = {"point", "directional", "spot"};
+  nlohmann::json j = {{"type", kTypes[static_cast<int>(l.type)]}, {"color", vec_json(l.color)}};
+  if (l.type != Light::Type::Directional) j["position"] = vec_json(l.position);
+  if (l.type != Light::Type::Point) j["direction"] = vec_json(l.direction);
+  j[l.type == Light::Type::Directional ? "irradiance" : "intensity"] = l.intensity;
+  if (l.type == Light::Type::Spot) {
+    j["inner_deg"] = l.inner_deg;
+    j["outer_deg"] = l.outer_deg;
+  }
+  return j;
+}
+
+// The scene names a client may ask for: the .json files of --scenes-dir, sorted.
+nlohmann::json scene_names(const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+    if (e.path().extension() == ".json") names.push_back(e.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// What a client needs to edit the scene it sees: its JSON (the file of a shipped scene, or the
+// inline scene as sent), its camera, lights and bounds.
+nlohmann::json scene_message(const nlohmann::json& hello, const Scene& scene,
+                             const std::filesystem::path& scenes_dir, long long request) {
+  nlohmann::json source;
+  if (hello.contains("scene")) {
+    source = hello["scene"];
+  } else if (hello.contains("scene_name") && hello["scene_name"].is_string()) {
+    std::ifstream in(scenes_dir / (hello["scene_name"].get<std::string>() + ".json"));
+    if (in) source = nlohmann::json::parse(in, nullptr, false);
+    if (source.is_discarded()) source = nullptr;
+  }
+  nlohmann::json lights = nlohmann::json::array();
+  for (const Light& l : scene.lights) lights.push_back(light_json(l));
+  Aabb b = scene.mesh->bounds();
+  return {{"type", "scene"},
+          {"request", request},
+          {"scene_name", hello.value("scene_name", "")},
+          {"source", source},
+          {"camera",
+           {{"position", vec_json(scene.camera.position)},
+            {"target", vec_json(scene.camera.target)},
+            {"up", vec_json(scene.camera.up)},
+            {"fov_deg", scene.camera.fov_deg}}},
+          {"lights", lights},
+          {"bounds", {{"min", vec_json(b.lo)}, {"max", vec_json(b.hi)}}},
+          {"scenes", scene_names(scenes_dir)}};
+}
+
+}  // namespace
 
 namespace beast = boost::beast;
 namespace websocket = beast::websocket;
@@ -121,11 +185,29 @@ void WsSession::read_hello(nlohmann::json msg) {
   boost::asio::post(workers_, [self = shared_from_this(), msg = std::move(msg)] {
     std::optional<Api::RenderSpec> spec;
     std::string error, field;
+    bool keep_view = false;
+    long long request = 0;
+    nlohmann::json said;
     try {
       JsonObject m(msg, "");
       m.string("type", std::nullopt);
+      keep_view = m.boolean("keep_view", false);
+      request = m.integer("request", 0, {0, 2e9});
+      std::optional<JsonObject> medium = m.optional_object("medium");
       spec = Api::read_render_spec(m, msg, self->options_, self->api_.scenes());
       m.finish();
+      said = scene_message(msg, *spec->scene, self->options_.scenes_dir, request);
+      if (medium) {
+        // A shipped scene in another medium: its file's JSON (which may name meshes anywhere
+        // the server's own scenes do) with the client's medium, validated as any scene.
+        if (!said["source"].is_object())
+          throw ValidationError("medium", "needs a scene_name whose file is in --scenes-dir");
+        said["source"]["medium"] = msg["medium"];
+        SceneLimits limits;
+        limits.max_image = self->options_.max_image;
+        spec->scene = std::make_shared<const Scene>(
+            parse_scene(said["source"], self->options_.scenes_dir, limits));
+      }
       Api::check_cost(self->options_, spec->pipeline, *spec->scene, spec->terms, spec->settings,
                       false, spec->max_error);
     } catch (const ValidationError& e) {
@@ -137,13 +219,18 @@ void WsSession::read_hello(nlohmann::json msg) {
       error = e.what();
     }
     boost::asio::post(self->ws_.get_executor(),
-                      [self, spec = std::move(spec), error, field]() mutable {
+                      [self, spec = std::move(spec), error, field, keep_view, request,
+                       said = std::move(said)]() mutable {
                         self->hello_pending_ = false;
                         if (self->closed_) return;
                         if (spec) {
-                          self->apply_hello(std::move(*spec));
+                          self->request_ = request;
+                          self->apply_hello(std::move(*spec), keep_view, std::move(said));
                         } else {
-                          self->send_error(error, field);
+                          nlohmann::json e = {{"type", "error"}, {"error", error}};
+                          if (!field.empty()) e["field"] = field;
+                          e["request"] = request;
+                          self->send(e.dump(), false);
                         }
                         while (!self->backlog_.empty() && !self->hello_pending_) {
                           std::string next = std::move(self->backlog_.front());
@@ -154,11 +241,27 @@ void WsSession::read_hello(nlohmann::json msg) {
   });
 }
 
-void WsSession::apply_hello(Api::RenderSpec spec) {
+void WsSession::apply_hello(Api::RenderSpec spec, bool keep_view, nlohmann::json said) {
+  // keep_view: the pose and lights the user steered to stay (a change of pipeline or quality);
+  // only possible once a scene was shown.
+  bool keep = keep_view && scene_;
   scene_ = spec.scene;
   scene_load_ms_ = spec.scene_load_ms;
-  camera_ = scene_->camera;
-  lights_ = scene_->lights;
+  if (!keep) {
+    camera_ = scene_->camera;
+    lights_ = scene_->lights;
+  } else {
+    nlohmann::json lights = nlohmann::json::array();
+    for (const Light& l : lights_) lights.push_back(light_json(l));
+    said["lights"] = lights;
+    said["camera"] = {{"position", vec_json(camera_.position)},
+                      {"target", vec_json(camera_.target)},
+                      {"up", vec_json(camera_.up)},
+                      {"fov_deg", camera_.fov_deg}};
+  }
+  said["kept_view"] = keep;
+  send(said.dump(), false);
+  exposure_ = spec.exposure;
   pipeline_ = spec.pipeline;
   terms_ = spec.terms;
   format_ = spec.format == "json" ? "jpg" : spec.format;
@@ -189,7 +292,8 @@ void WsSession::send_error(const std::string& error, const std::string& field) {
 void WsSession::handle(const std::string& text) {
   nlohmann::json msg = parse_json(text, "message");
   JsonObject m(msg, "");
-  std::string type = m.choice("type", {"hello", "camera", "lights", "ack", "ping"}, std::nullopt);
+  std::string type =
+      m.choice("type", {"hello", "camera", "lights", "ack", "ping", "cancel"}, std::nullopt);
   if (type == "hello") {
     return read_hello(std::move(msg));
   } else if (type == "camera") {
@@ -237,6 +341,18 @@ void WsSession::handle(const std::string& text) {
     awaiting_ack_ = false;
     in_flight_ = 0;
     schedule_refine();
+  } else if (type == "cancel") {
+    // The user gave up on a long frame: it stops, the view stays still and is not refined.
+    m.finish();
+    bool had = in_flight_ && !awaiting_ack_;
+    cancel_unsent("cancelled by the user");
+    refine_.stop();
+    dirty_ = false;
+    refine_timer_.cancel();
+    send(nlohmann::json{{"type", "cancelled"}, {"request", request_}, {"frame_cancelled", had}}
+             .dump(),
+         false);
+    return;
   } else {
     m.finish();
     send(nlohmann::json{{"type", "pong"}}.dump(), false);
@@ -302,8 +418,9 @@ void WsSession::start_frame(std::optional<RefineStep> step) {
   f.lights = lights_;
   bool reduced = !step;
   if (reduced) {  // cheaper while the user interacts
-    f.width = std::max(1, scene_->width / 2);
-    f.height = std::max(1, scene_->height / 2);
+    double scale = reduced_scale(pipeline_);
+    f.width = std::max(1, static_cast<int>(std::lround(scene_->width * scale)));
+    f.height = std::max(1, static_cast<int>(std::lround(scene_->height * scale)));
   }
   if (!step || step->stage == RefineStep::Stage::Full) {  // the session's own frames
     f.pipeline = pipeline_;
@@ -340,12 +457,31 @@ void WsSession::start_frame(std::optional<RefineStep> step) {
     on_rendered(frame, reduced, RenderOutcome{std::nullopt, 503, "the server is stopping", "", 0});
 }
 
+// The side scale of a reduced frame: what the pipeline's measured ms per pixel says fits the
+// budget; half size until a reduced frame was measured.
+double WsSession::reduced_scale(const std::string& pipeline) const {
+  auto it = ms_per_pixel_.find(pipeline);
+  if (it == ms_per_pixel_.end() || it->second <= 0 || !scene_) return 0.5;
+  double pixels = kFrameBudgetMs / it->second;
+  double full = double(scene_->width) * scene_->height;
+  return std::clamp(std::sqrt(pixels / full), 0.125, 0.5);
+}
+
 void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
   if (closed_ || frame != in_flight_) return;  // the client left or moved meanwhile: not sent
+  if (reduced && o.result && o.result->image.width > 0) {
+    double ms = 0;
+    for (const auto& t : o.result->timings)
+      if (t.stage != "scene_load") ms += t.ms;
+    double per_pixel = ms / (double(o.result->image.width) * o.result->image.height);
+    auto [it, fresh] = ms_per_pixel_.emplace(pipeline_, per_pixel);
+    if (!fresh) it->second = 0.5 * it->second + 0.5 * per_pixel;  // smoothed: one slow frame
+  }
   if (!o.result) {
     in_flight_ = 0;  // no frame to ack
     if (frame_step_) refine_.stop();
-    nlohmann::json e = {{"type", "error"}, {"error", o.error}, {"frame", frame}};
+    nlohmann::json e = {
+        {"type", "error"}, {"error", o.error}, {"frame", frame}, {"request", request_}};
     if (!o.field.empty()) e["field"] = o.field;
     send(e.dump(), false);
     return;
@@ -371,47 +507,48 @@ void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
 // Encoded on the worker pool, then sent from this strand. `extra`: header fields beyond the
 // render's own.
 void WsSession::send_frame(long long frame, bool reduced, RenderOutcome o, nlohmann::json extra) {
-  boost::asio::post(
-      workers_, [self = shared_from_this(), frame, reduced, o = std::move(o), format = format_,
-                 extra = std::move(extra), cam_rev = frame_camera_revision_,
-                 light_rev = frame_light_revision_]() mutable {
-        RenderResult& r = *o.result;
-        nlohmann::json timings = nlohmann::json::object();
-        for (const auto& t : r.timings) timings[t.stage] = t.ms;
-        nlohmann::json header;
-        std::string bytes;
-        try {
-          header = {{"type", "frame"},
-                    {"frame", frame},
-                    {"camera_revision", cam_rev},
-                    {"light_revision", light_rev},
-                    {"pipeline", r.plan.pipeline},
-                    {"plan", r.plan},
-                    {"timings_ms", timings},
-                    {"queue_wait_ms", o.wait_ms},
-                    {"width", r.image.width},
-                    {"height", r.image.height},
-                    {"format", format},
-                    {"reduced", reduced}};
-          if (r.error_estimate) header["error_estimate"] = *r.error_estimate;
-          header.update(extra);
-          bytes = encode_image(r.image, format);
-        } catch (const std::exception& e) {
-          header = {{"type", "error"}, {"error", e.what()}, {"frame", frame}};
-        }
-        boost::asio::post(self->ws_.get_executor(), [self, frame, header = std::move(header),
-                                                     bytes = std::move(bytes)]() mutable {
-          if (self->closed_ || frame != self->in_flight_) return;
-          if (header["type"] != "frame") {
-            self->in_flight_ = 0;
-            self->send(header.dump(), false);
-            return self->maybe_render();
-          }
-          self->send(header.dump(), false);
-          self->send(std::move(bytes), true);
-          self->awaiting_ack_ = true;
-        });
-      });
+  boost::asio::post(workers_, [self = shared_from_this(), frame, reduced, o = std::move(o),
+                               format = format_, extra = std::move(extra),
+                               cam_rev = frame_camera_revision_, light_rev = frame_light_revision_,
+                               request = request_, exposure = exposure_]() mutable {
+    RenderResult& r = *o.result;
+    nlohmann::json timings = nlohmann::json::object();
+    for (const auto& t : r.timings) timings[t.stage] = t.ms;
+    nlohmann::json header;
+    std::string bytes;
+    try {
+      header = {{"type", "frame"},
+                {"frame", frame},
+                {"camera_revision", cam_rev},
+                {"light_revision", light_rev},
+                {"pipeline", r.plan.pipeline},
+                {"plan", r.plan},
+                {"timings_ms", timings},
+                {"queue_wait_ms", o.wait_ms},
+                {"width", r.image.width},
+                {"height", r.image.height},
+                {"format", format},
+                {"reduced", reduced},
+                {"request", request}};
+      if (r.error_estimate) header["error_estimate"] = *r.error_estimate;
+      header.update(extra);
+      bytes = encode_image(r.image, format, ToneMap{exposure});
+    } catch (const std::exception& e) {
+      header = {{"type", "error"}, {"error", e.what()}, {"frame", frame}};
+    }
+    boost::asio::post(self->ws_.get_executor(), [self, frame, header = std::move(header),
+                                                 bytes = std::move(bytes)]() mutable {
+      if (self->closed_ || frame != self->in_flight_) return;
+      if (header["type"] != "frame") {
+        self->in_flight_ = 0;
+        self->send(header.dump(), false);
+        return self->maybe_render();
+      }
+      self->send(header.dump(), false);
+      self->send(std::move(bytes), true);
+      self->awaiting_ack_ = true;
+    });
+  });
 }
 
 void WsSession::send(std::string message, bool binary) {
