@@ -205,8 +205,15 @@ void WsSession::read_hello(nlohmann::json msg) {
         said["source"]["medium"] = msg["medium"];
         SceneLimits limits;
         limits.max_image = self->options_.max_image;
-        spec->scene = std::make_shared<const Scene>(
-            parse_scene(said["source"], self->options_.scenes_dir, limits));
+        try {
+          spec->scene = std::make_shared<const Scene>(
+              parse_scene(said["source"], self->options_.scenes_dir, limits));
+        } catch (const ValidationError& e) {  // "scene.medium.g" is the hello's "medium.g"
+          std::string f = e.field();
+          std::string message = std::string(e.what()).substr(f.empty() ? 0 : f.size() + 2);
+          if (f.rfind("scene.", 0) == 0) f = f.substr(6);
+          throw ValidationError(f, message);
+        }
       }
       Api::check_cost(self->options_, spec->pipeline, *spec->scene, spec->terms, spec->settings,
                       false, spec->max_error);
@@ -260,7 +267,7 @@ void WsSession::apply_hello(Api::RenderSpec spec, bool keep_view, nlohmann::json
                       {"fov_deg", camera_.fov_deg}};
   }
   said["kept_view"] = keep;
-  send(said.dump(), false);
+  if (said["request"] != 0) send(said.dump(), false);  // asked for: clients without one get none
   exposure_ = spec.exposure;
   pipeline_ = spec.pipeline;
   terms_ = spec.terms;

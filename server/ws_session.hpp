@@ -7,10 +7,10 @@
 //    "request": n, "keep_view": true,     keep_view: the session's camera and lights stay
 //    "medium": {...}}                     with scene_name: that scene in another medium
 //
-// After a hello is applied the server says {"type": "scene", "request", "scene_name", "source"
-// (the scene's JSON, for a client to edit), "camera", "lights", "bounds": {"min", "max"},
-// "scenes" (names in --scenes-dir)}; frame headers and errors carry the hello's "request", so a
-// client drops frames of a scene it no longer shows.
+// After a hello with a "request" (> 0) is applied the server says {"type": "scene", "request",
+// "scene_name", "source" (the scene's JSON, for a client to edit), "camera", "lights", "bounds":
+// {"min", "max"}, "scenes" (names in --scenes-dir)}; frame headers and errors carry the hello's
+// "request", so a client drops frames of a scene it no longer shows.
 //   {"type": "camera", "position": [..], "target": [..], "up": [..], "fov_deg": 40, "revision": n}
 //   {"type": "lights", "lights": [...], "revision": n}
 //   {"type": "cancel"}                    stops the frame in flight (not yet sent) and the
