@@ -4,68 +4,25 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 
+#include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
+#include "protocol/session_messages.hpp"
 
 namespace scatter::server {
 namespace {
 
-nlohmann::json vec_json(const Vec3& v) {
-  return nlohmann::json::array({v.x, v.y, v.z});
-}
-
-nlohmann::json light_json(const Light& l) {
-  static const char* kTypes[] = {"point", "directional", "spot"};
-  nlohmann::json j = {{"type", kTypes[static_cast<int>(l.type)]}, {"color", vec_json(l.color)}};
-  if (l.type != Light::Type::Directional) j["position"] = vec_json(l.position);
-  if (l.type != Light::Type::Point) j["direction"] = vec_json(l.direction);
-  j[l.type == Light::Type::Directional ? "irradiance" : "intensity"] = l.intensity;
-  if (l.type == Light::Type::Spot) {
-    j["inner_deg"] = l.inner_deg;
-    j["outer_deg"] = l.outer_deg;
+// `s` with the pipeline's draft quality's settings that shape only the frame (none that would
+// make another bake product or reset a kept state): cheaper frames while the user drags.
+Settings with_draft(const std::string& pipeline, Settings s) {
+  const PipelineInfo& info = pipeline_info(pipeline);
+  for (const Quality& q : info.qualities) {
+    if (q.name != "draft") continue;
+    for (const auto& [key, value] : q.settings)
+      for (const SettingInfo& setting : info.settings)
+        if (setting.key == key && setting.shapes.what == Shapes::What::Frame) s[key] = value;
   }
-  return j;
-}
-
-// The scene names a client may ask for: the .json files of --scenes-dir, sorted.
-nlohmann::json scene_names(const std::filesystem::path& dir) {
-  std::vector<std::string> names;
-  std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(dir, ec))
-    if (e.path().extension() == ".json") names.push_back(e.path().stem().string());
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
-// What a client needs to edit the scene it sees: its JSON (the file of a shipped scene, or the
-// inline scene as sent), its camera, lights and bounds.
-nlohmann::json scene_message(const nlohmann::json& hello, const Scene& scene,
-                             const std::filesystem::path& scenes_dir, long long request) {
-  nlohmann::json source;
-  if (hello.contains("scene")) {
-    source = hello["scene"];
-  } else if (hello.contains("scene_name") && hello["scene_name"].is_string()) {
-    std::ifstream in(scenes_dir / (hello["scene_name"].get<std::string>() + ".json"));
-    if (in) source = nlohmann::json::parse(in, nullptr, false);
-    if (source.is_discarded()) source = nullptr;
-  }
-  nlohmann::json lights = nlohmann::json::array();
-  for (const Light& l : scene.lights) lights.push_back(light_json(l));
-  Aabb b = scene.mesh->bounds();
-  return {{"type", "scene"},
-          {"request", request},
-          {"scene_name", hello.value("scene_name", "")},
-          {"source", source},
-          {"camera",
-           {{"position", vec_json(scene.camera.position)},
-            {"target", vec_json(scene.camera.target)},
-            {"up", vec_json(scene.camera.up)},
-            {"fov_deg", scene.camera.fov_deg}}},
-          {"lights", lights},
-          {"bounds", {{"min", vec_json(b.lo)}, {"max", vec_json(b.hi)}}},
-          {"scenes", scene_names(scenes_dir)}};
+  return s;
 }
 
 }  // namespace
@@ -261,10 +218,7 @@ void WsSession::apply_hello(Api::RenderSpec spec, bool keep_view, nlohmann::json
     nlohmann::json lights = nlohmann::json::array();
     for (const Light& l : lights_) lights.push_back(light_json(l));
     said["lights"] = lights;
-    said["camera"] = {{"position", vec_json(camera_.position)},
-                      {"target", vec_json(camera_.target)},
-                      {"up", vec_json(camera_.up)},
-                      {"fov_deg", camera_.fov_deg}};
+    said["camera"] = camera_json(camera_);
   }
   said["kept_view"] = keep;
   if (said["request"] != 0) send(said.dump(), false);  // asked for: clients without one get none
@@ -425,14 +379,15 @@ void WsSession::start_frame(std::optional<RefineStep> step) {
   f.lights = lights_;
   bool reduced = !step;
   if (reduced) {  // cheaper while the user interacts
-    double scale = reduced_scale(pipeline_);
-    f.width = std::max(1, static_cast<int>(std::lround(scene_->width * scale)));
-    f.height = std::max(1, static_cast<int>(std::lround(scene_->height * scale)));
+    const Reduced& c = reduced_[pipeline_];
+    f.width = std::max(1, static_cast<int>(std::lround(scene_->width * c.scale)));
+    f.height = std::max(1, static_cast<int>(std::lround(scene_->height * c.scale)));
   }
   if (!step || step->stage == RefineStep::Stage::Full) {  // the session's own frames
     f.pipeline = pipeline_;
     f.terms = terms_;
-    f.settings = settings_;
+    f.settings =
+        reduced && reduced_[pipeline_].draft ? with_draft(pipeline_, settings_) : settings_;
     f.max_error = max_error_;
   } else {
     f.pipeline = step->pipeline;
@@ -464,26 +419,23 @@ void WsSession::start_frame(std::optional<RefineStep> step) {
     on_rendered(frame, reduced, RenderOutcome{std::nullopt, 503, "the server is stopping", "", 0});
 }
 
-// The side scale of a reduced frame: what the pipeline's measured ms per pixel says fits the
-// budget; half size until a reduced frame was measured.
-double WsSession::reduced_scale(const std::string& pipeline) const {
-  auto it = ms_per_pixel_.find(pipeline);
-  if (it == ms_per_pixel_.end() || it->second <= 0 || !scene_) return 0.5;
-  double pixels = kFrameBudgetMs / it->second;
-  double full = double(scene_->width) * scene_->height;
-  return std::clamp(std::sqrt(pixels / full), 0.125, 0.5);
+// Steers the next reduced frames of the session's pipeline towards kFrameBudgetMs: the side
+// scale follows sqrt(budget / measured) (pixels cost about linearly), between 1/4 and 1/2; at 1/4
+// and still over budget, the draft frame settings too.
+void WsSession::measure_reduced(const RenderResult& r) {
+  double ms = 0;
+  for (const auto& t : r.timings)
+    if (t.stage != "scene_load") ms += t.ms;
+  if (ms <= 0) return;
+  Reduced& c = reduced_[pipeline_];
+  double wanted = c.scale * std::sqrt(kFrameBudgetMs / ms);
+  if (wanted < 0.25 && !c.draft) c.draft = true;
+  c.scale = std::clamp(wanted, 0.25, 0.5);
 }
 
 void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
   if (closed_ || frame != in_flight_) return;  // the client left or moved meanwhile: not sent
-  if (reduced && o.result && o.result->image.width > 0) {
-    double ms = 0;
-    for (const auto& t : o.result->timings)
-      if (t.stage != "scene_load") ms += t.ms;
-    double per_pixel = ms / (double(o.result->image.width) * o.result->image.height);
-    auto [it, fresh] = ms_per_pixel_.emplace(pipeline_, per_pixel);
-    if (!fresh) it->second = 0.5 * it->second + 0.5 * per_pixel;  // smoothed: one slow frame
-  }
+  if (reduced && o.result && !frame_step_) measure_reduced(*o.result);
   if (!o.result) {
     in_flight_ = 0;  // no frame to ack
     if (frame_step_) refine_.stop();

@@ -22,7 +22,8 @@
 // newest state when it starts, so stale poses are never rendered. At most one frame is in flight:
 // from the moment it is queued until the client acks it, and an ack counts only for that frame.
 // While poses keep coming frames are rendered reduced, at a scale chosen per pipeline from its
-// measured reduced-frame times against kFrameBudgetMs (between 1/8 and 1/2 of each side); after
+// measured reduced-frame times against kFrameBudgetMs (between 1/4 and 1/2 of each side, then the
+// pipeline's draft frame settings where 1/4 is still over budget); after
 // ~200 ms without a change (and after a hello) the still view is refined (server/refine.hpp): the
 // full-size frame (header "reduced": false), the pipeline's higher qualities, then accumulated
 // reference passes, each refined frame's header with "error_estimate" and "refine": {"stage",
@@ -121,9 +122,14 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   long long next_frame_ = 1;
   long long request_ = 0;  // the applied hello's "request", echoed in frame headers
   double exposure_ = 1.0;
-  // Reduced frames: the scale of each side, per pipeline, and the measured ms per pixel.
-  std::map<std::string, double> ms_per_pixel_;
-  double reduced_scale(const std::string& pipeline) const;
+  // Reduced frames, per pipeline: the scale of each side, and whether the pipeline's draft
+  // quality (its settings that shape only the frame) is used, steered by measured frame times.
+  struct Reduced {
+    double scale = 0.5;
+    bool draft = false;
+  };
+  std::map<std::string, Reduced> reduced_;
+  void measure_reduced(const RenderResult& r);
   bool hello_pending_ = false;
   bool holds_slot_ = true;  // the Api's session slot, given back once (at end() or destruction)
   std::deque<std::string> backlog_;
