@@ -41,8 +41,9 @@ TEST(SessionMessages, TheSceneMessageCarriesTheSceneAndTheShippedNames) {
   EXPECT_TRUE(std::is_sorted(names.begin(), names.end()));
   EXPECT_NE(std::find(names.begin(), names.end(), "jade"), names.end());
   // A name that is no file gives no source rather than an error (the hello was validated).
-  EXPECT_TRUE(scene_message({{"scene_name", "gone"}}, scene, test::source_path("scenes"), 0)["source"]
-                  .is_null());
+  EXPECT_TRUE(
+      scene_message({{"scene_name", "gone"}}, scene, test::source_path("scenes"), 0)["source"]
+          .is_null());
 }
 
 }  // namespace
