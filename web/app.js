@@ -416,8 +416,8 @@ function messageArrived(msg) {
   else if (msg.type === 'cancelled') { state.waitingSince = 0; $('status').textContent = 'cancelled: the view stays as it is'; }
   else if (msg.type === 'error' && (msg.request === undefined || msg.request === state.request)) {
     state.waitingSince = 0;
-    const field = msg.field ? ` (${msg.field})` : '';
-    showError(`error${field}: ${msg.error}`);
+    showError(`error: ${msg.error}`);  // the message starts with the field to blame
+    $('error').dataset.field = msg.field || '';
     // A pipeline that cannot render this scene (its error names it): not offered for it again;
     // the view goes back to the last pipeline that worked, else surface.
     const p = $('pipeline').value;
