@@ -253,8 +253,8 @@ void WsSession::send_error(const std::string& error, const std::string& field) {
 void WsSession::handle(const std::string& text) {
   nlohmann::json msg = parse_json(text, "message");
   JsonObject m(msg, "");
-  std::string type =
-      m.choice("type", {"hello", "camera", "lights", "ack", "ping", "cancel"}, std::nullopt);
+  std::string type = m.choice(
+      "type", {"hello", "camera", "lights", "ack", "ping", "cancel", "snapshot"}, std::nullopt);
   if (type == "hello") {
     return read_hello(std::move(msg));
   } else if (type == "camera") {
@@ -302,6 +302,15 @@ void WsSession::handle(const std::string& text) {
     awaiting_ack_ = false;
     in_flight_ = 0;
     schedule_refine();
+  } else if (type == "snapshot") {
+    // The current view at full size as linear EXR: the next still frame, then refining goes on
+    // in the session's format.
+    if (!scene_) throw ValidationError("type", "send hello first");
+    m.finish();
+    snapshot_ = true;
+    cancel_unsent("a snapshot");
+    dirty_ = true;
+    interactive_ = false;
   } else if (type == "cancel") {
     // The user gave up on a long frame: it stops, the view stays still and is not refined.
     m.finish();
@@ -395,6 +404,7 @@ void WsSession::start_frame(std::optional<RefineStep> step) {
     f.settings = step->settings;
   }
   f.scene_load_ms = std::exchange(scene_load_ms_, 0);
+  frame_format_ = !reduced && std::exchange(snapshot_, false) ? "exr" : format_;
   f.max_seconds = options_.max_render_s;
   last_frame_reduced_ = reduced;
   frame_step_ = std::move(step);
@@ -467,7 +477,7 @@ void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
 // render's own.
 void WsSession::send_frame(long long frame, bool reduced, RenderOutcome o, nlohmann::json extra) {
   boost::asio::post(workers_, [self = shared_from_this(), frame, reduced, o = std::move(o),
-                               format = format_, extra = std::move(extra),
+                               format = frame_format_, extra = std::move(extra),
                                cam_rev = frame_camera_revision_, light_rev = frame_light_revision_,
                                request = request_, exposure = exposure_]() mutable {
     RenderResult& r = *o.result;

@@ -102,6 +102,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   Camera camera_;
   std::vector<Light> lights_;
   std::string pipeline_ = "surface", terms_, format_ = "jpg";
+  bool snapshot_ = false;             // the next still frame goes out as EXR ("snapshot")
+  std::string frame_format_ = "jpg";  // the frame in flight's
   Settings settings_;
   std::optional<double> max_error_;  // the hello's quality.max_error, for the session's frames
   double refine_floor_ = 0.01;       // the hello's quality.refine_floor

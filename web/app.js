@@ -369,18 +369,12 @@ function download(blob, name) {
   a.remove();
   setTimeout(() => URL.revokeObjectURL(a.href), 10000);
 }
-// The linear frame: the same view by POST /api/render as EXR (linear float radiance).
-async function saveExr() {
-  const p = selected();
-  const json = structuredClone((state.source && state.source.json) || {});
-  json.camera = { position: cameraPosition(), target: state.orbit.target, up: [0, 1, 0], fov_deg: state.orbit.fov };
-  json.lights = state.lights;
+// The linear frame: the session renders the current view at full size as EXR (its "snapshot"
+// message); that frame is downloaded, not drawn.
+function saveExr() {
+  state.snapshot = true;
   $('status').textContent = 'rendering the EXR';
-  const r = await api('/api/render', { method: 'POST', raw: true, body: JSON.stringify(
-    { scene: json, pipeline: p.name, terms: $('terms').value, settings: qualitySettings(p), format: 'exr' }) });
-  if (!r.blob) return showError(`EXR not rendered: ${r.body.error}`);
-  download(r.blob, `scatter-${p.name}.exr`);
-  $('status').textContent = 'connected';
+  send({ type: 'snapshot' }, 'h' + state.request);
 }
 
 function frameArrived(header, bitmap) {
@@ -449,6 +443,12 @@ function connect() {
     // scene, pipeline or material) is not drawn.
     send({ type: 'ack', frame: header ? header.frame : 0 });
     if (!header || header.request !== state.request) return;
+    if (header.format === 'exr') {
+      state.snapshot = false;
+      state.waitingSince = 0;
+      $('status').textContent = 'connected';
+      return download(event.data, `scatter-${header.pipeline}.exr`);
+    }
     state.lastGood = { pipeline: header.pipeline };
     frameArrived(header, await createImageBitmap(event.data));
   };

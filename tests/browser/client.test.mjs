@@ -208,6 +208,11 @@ test('first sight: a translucent jade bunny, steered without losing the view', {
     const saved = `${out}/browser-saved.png`;
     await download.saveAs(saved);
     assert.deepEqual([...readFileSync(saved).subarray(0, 4)], [0x89, 0x50, 0x4e, 0x47]);
+    // Save the linear frame as EXR: the session's snapshot, downloaded (OpenEXR's magic number).
+    const [exr] = await Promise.all([page.waitForEvent('download', { timeout: 60000 }), page.click('#save-exr')]);
+    const savedExr = `${out}/browser-saved.exr`;
+    await exr.saveAs(savedExr);
+    assert.deepEqual([...readFileSync(savedExr).subarray(0, 4)], [0x76, 0x2f, 0x31, 0x01]);
 
     // Upload a mesh (a closed cube): it is shown in the current medium.
     const obj = `${out}/browser-cube.obj`;

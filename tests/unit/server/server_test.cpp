@@ -240,6 +240,28 @@ TEST_F(ServerTest, WebSocketHelloRequestKeepViewAndCancel) {
   c.close();
 }
 
+// A snapshot: the current view's next full-size frame comes as linear EXR.
+TEST_F(ServerTest, WebSocketSnapshotIsAnExrFrame) {
+  WsClient c(server_->port());
+  c.send(hello());
+  std::string image;
+  nlohmann::json f = c.next_frame(image);
+  ASSERT_EQ(f["type"], "frame") << f.dump();
+  EXPECT_EQ(f["format"], "png");
+  c.send({{"type", "snapshot"}});
+  c.send({{"type", "ack"}, {"frame", f["frame"]}});
+  for (int i = 0; i < 5; ++i) {  // refinement frames may come first; the snapshot follows
+    f = c.next_frame(image);
+    ASSERT_EQ(f["type"], "frame") << f.dump();
+    c.send({{"type", "ack"}, {"frame", f["frame"]}});
+    if (f["format"] == "exr") break;
+  }
+  EXPECT_EQ(f["format"], "exr");
+  EXPECT_EQ(f["width"], 64);
+  EXPECT_EQ(image.substr(0, 4), std::string("\x76\x2f\x31\x01", 4));
+  c.close();
+}
+
 // A hello's "medium" renders a shipped scene in another medium; a bad one names its field.
 TEST_F(ServerTest, WebSocketHelloMediumOverridesAShippedScene) {
   WsClient c(server_->port());
