@@ -2,6 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cctype>
+
+#include "server/api_util.hpp"
 #include "server/ws_session.hpp"
 
 namespace scatter::server {
@@ -26,6 +29,60 @@ http::response<http::string_body> to_beast(const HttpResponse& r, unsigned versi
   res.prepare_payload();
   return res;
 }
+
+// The page's token travels in this cookie once /?token=T was opened, so that the page's own
+// assets, REST calls and WebSocket carry it without the page adding it to every URL.
+constexpr const char* kTokenCookie = "scatter_token";
+
+// Every byte but unreserved ones as %XX, so that any token survives the cookie.
+std::string percent_encode(const std::string& s) {
+  static const char* kHex = "0123456789ABCDEF";
+  std::string out;
+  for (unsigned char c : s) {
+    if (std::isalnum(c) || c == '-' || c == '_' || c == '.' || c == '~') {
+      out += static_cast<char>(c);
+    } else {
+      out += '%';
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    }
+  }
+  return out;
+}
+
+// "Bearer T" from the Authorization header, else from the token cookie (percent-decoded).
+std::string authorization(const http::request<http::string_body>& req) {
+  std::string header(req[http::field::authorization]);
+  if (!header.empty()) return header;
+  std::string_view cookies = req[http::field::cookie];
+  std::string name = std::string(kTokenCookie) + "=";
+  for (size_t at = 0; at < cookies.size();) {
+    size_t end = std::min(cookies.find(';', at), cookies.size());
+    std::string_view item = cookies.substr(at, end - at);
+    while (!item.empty() && item.front() == ' ') item.remove_prefix(1);
+    if (item.substr(0, name.size()) == name) {
+      auto q = parse_query("?t=" + std::string(item.substr(name.size())));
+      if (auto t = q.find("t"); t != q.end()) return "Bearer " + t->second;
+    }
+    at = end + 1;
+  }
+  return "";
+}
+
+bool is_page(const std::string& path) {
+  return path == "/" || path == "/index.html";
+}
+
+// A person who opened the page with a wrong or missing token reads why, not JSON.
+constexpr const char* kUnauthorizedPage =
+    "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\">"
+    "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+    "<title>scatter: token needed</title></head>"
+    "<body style=\"font: 16px sans-serif; background: #111; color: #ddd; padding: 2rem\">"
+    "<h1>This scatterd needs a token</h1>"
+    "<p>The server was started with <code>--token</code>, and this address carries no token or "
+    "a wrong one. Open <code>/?token=YOUR_TOKEN</code> (percent-encode <code>+ / = &amp;</code> "
+    "as <code>%2B %2F %3D %26</code>); the page then keeps it in a cookie.</p></body></html>";
 
 // Beast's default (8 KiB) as an explicit limit: the 431 message names it.
 constexpr uint32_t kHeaderLimit = 8 * 1024;
@@ -71,7 +128,7 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
   auto req = parser_->release();
   if (beast::websocket::is_upgrade(req)) {
     std::string target(req.target());
-    HttpRequest probe{"GET", target, "", std::string(req[http::field::authorization])};
+    HttpRequest probe{"GET", target, "", authorization(req)};
     if (target.substr(0, target.find('?')) == "/api/ws" && api_.authorized(probe)) {
       if (!api_.acquire_session()) {
         api_.metrics().count_request("/api/ws", 503);
@@ -87,10 +144,23 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
   }
   cancel_ = std::make_shared<CancelToken>();
   HttpRequest request{std::string(req.method_string()), std::string(req.target()),
-                      std::move(req.body()), std::string(req[http::field::authorization]), cancel_};
+                      std::move(req.body()), authorization(req), cancel_};
   unsigned version = req.version();
   bool keep_alive = req.keep_alive();
-  auto respond = [self = shared_from_this(), version, keep_alive](HttpResponse r) {
+  std::string path = request.target.substr(0, request.target.find('?'));
+  std::string query_token;
+  if (is_page(path) && req.method() == http::verb::get) {
+    auto q = parse_query(request.target);
+    if (auto t = q.find("token"); t != q.end()) query_token = t->second;
+  }
+  bool page = is_page(path);
+  auto respond = [self = shared_from_this(), version, keep_alive, page,
+                  query_token](HttpResponse r) {
+    if (page && r.status == 401) r = {401, "text/html; charset=utf-8", kUnauthorizedPage, {}};
+    if (page && r.status == 200 && !query_token.empty())
+      r.headers.emplace_back("Set-Cookie", std::string(kTokenCookie) + "=" +
+                                               percent_encode(query_token) +
+                                               "; Path=/; HttpOnly; SameSite=Strict");
     boost::asio::post(self->stream_.get_executor(), [self, r = std::move(r), version, keep_alive] {
       self->send(to_beast(r, version, keep_alive));
     });

@@ -2,9 +2,30 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cmath>
+
+#include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
+#include "protocol/session_messages.hpp"
 
 namespace scatter::server {
+namespace {
+
+// `s` with the pipeline's draft quality's settings that shape only the frame (none that would
+// make another bake product or reset a kept state): cheaper frames while the user drags.
+Settings with_draft(const std::string& pipeline, Settings s) {
+  const PipelineInfo& info = pipeline_info(pipeline);
+  for (const Quality& q : info.qualities) {
+    if (q.name != "draft") continue;
+    for (const auto& [key, value] : q.settings)
+      for (const SettingInfo& setting : info.settings)
+        if (setting.key == key && setting.shapes.what == Shapes::What::Frame) s[key] = value;
+  }
+  return s;
+}
+
+}  // namespace
 
 namespace beast = boost::beast;
 namespace websocket = beast::websocket;
@@ -121,11 +142,36 @@ void WsSession::read_hello(nlohmann::json msg) {
   boost::asio::post(workers_, [self = shared_from_this(), msg = std::move(msg)] {
     std::optional<Api::RenderSpec> spec;
     std::string error, field;
+    bool keep_view = false;
+    long long request = 0;
+    nlohmann::json said;
     try {
       JsonObject m(msg, "");
       m.string("type", std::nullopt);
+      keep_view = m.boolean("keep_view", false);
+      request = m.integer("request", 0, {0, 2e9});
+      std::optional<JsonObject> medium = m.optional_object("medium");
       spec = Api::read_render_spec(m, msg, self->options_, self->api_.scenes());
       m.finish();
+      said = scene_message(msg, *spec->scene, self->options_.scenes_dir, request);
+      if (medium) {
+        // A shipped scene in another medium: its file's JSON (which may name meshes anywhere
+        // the server's own scenes do) with the client's medium, validated as any scene.
+        if (!said["source"].is_object())
+          throw ValidationError("medium", "needs a scene_name whose file is in --scenes-dir");
+        said["source"]["medium"] = msg["medium"];
+        SceneLimits limits;
+        limits.max_image = self->options_.max_image;
+        try {
+          spec->scene = std::make_shared<const Scene>(
+              parse_scene(said["source"], self->options_.scenes_dir, limits));
+        } catch (const ValidationError& e) {  // "scene.medium.g" is the hello's "medium.g"
+          std::string f = e.field();
+          std::string message = std::string(e.what()).substr(f.empty() ? 0 : f.size() + 2);
+          if (f.rfind("scene.", 0) == 0) f = f.substr(6);
+          throw ValidationError(f, message);
+        }
+      }
       Api::check_cost(self->options_, spec->pipeline, *spec->scene, spec->terms, spec->settings,
                       false, spec->max_error);
     } catch (const ValidationError& e) {
@@ -137,13 +183,18 @@ void WsSession::read_hello(nlohmann::json msg) {
       error = e.what();
     }
     boost::asio::post(self->ws_.get_executor(),
-                      [self, spec = std::move(spec), error, field]() mutable {
+                      [self, spec = std::move(spec), error, field, keep_view, request,
+                       said = std::move(said)]() mutable {
                         self->hello_pending_ = false;
                         if (self->closed_) return;
                         if (spec) {
-                          self->apply_hello(std::move(*spec));
+                          self->request_ = request;
+                          self->apply_hello(std::move(*spec), keep_view, std::move(said));
                         } else {
-                          self->send_error(error, field);
+                          nlohmann::json e = {{"type", "error"}, {"error", error}};
+                          if (!field.empty()) e["field"] = field;
+                          e["request"] = request;
+                          self->send(e.dump(), false);
                         }
                         while (!self->backlog_.empty() && !self->hello_pending_) {
                           std::string next = std::move(self->backlog_.front());
@@ -154,11 +205,24 @@ void WsSession::read_hello(nlohmann::json msg) {
   });
 }
 
-void WsSession::apply_hello(Api::RenderSpec spec) {
+void WsSession::apply_hello(Api::RenderSpec spec, bool keep_view, nlohmann::json said) {
+  // keep_view: the pose and lights the user steered to stay (a change of pipeline or quality);
+  // only possible once a scene was shown.
+  bool keep = keep_view && scene_;
   scene_ = spec.scene;
   scene_load_ms_ = spec.scene_load_ms;
-  camera_ = scene_->camera;
-  lights_ = scene_->lights;
+  if (!keep) {
+    camera_ = scene_->camera;
+    lights_ = scene_->lights;
+  } else {
+    nlohmann::json lights = nlohmann::json::array();
+    for (const Light& l : lights_) lights.push_back(light_json(l));
+    said["lights"] = lights;
+    said["camera"] = camera_json(camera_);
+  }
+  said["kept_view"] = keep;
+  if (said["request"] != 0) send(said.dump(), false);  // asked for: clients without one get none
+  exposure_ = spec.exposure;
   pipeline_ = spec.pipeline;
   terms_ = spec.terms;
   format_ = spec.format == "json" ? "jpg" : spec.format;
@@ -189,7 +253,8 @@ void WsSession::send_error(const std::string& error, const std::string& field) {
 void WsSession::handle(const std::string& text) {
   nlohmann::json msg = parse_json(text, "message");
   JsonObject m(msg, "");
-  std::string type = m.choice("type", {"hello", "camera", "lights", "ack", "ping"}, std::nullopt);
+  std::string type = m.choice(
+      "type", {"hello", "camera", "lights", "ack", "ping", "cancel", "snapshot"}, std::nullopt);
   if (type == "hello") {
     return read_hello(std::move(msg));
   } else if (type == "camera") {
@@ -237,6 +302,27 @@ void WsSession::handle(const std::string& text) {
     awaiting_ack_ = false;
     in_flight_ = 0;
     schedule_refine();
+  } else if (type == "snapshot") {
+    // The current view at full size as linear EXR: the next still frame, then refining goes on
+    // in the session's format.
+    if (!scene_) throw ValidationError("type", "send hello first");
+    m.finish();
+    snapshot_ = true;
+    cancel_unsent("a snapshot");
+    dirty_ = true;
+    interactive_ = false;
+  } else if (type == "cancel") {
+    // The user gave up on a long frame: it stops, the view stays still and is not refined.
+    m.finish();
+    bool had = in_flight_ && !awaiting_ack_;
+    cancel_unsent("cancelled by the user");
+    refine_.stop();
+    dirty_ = false;
+    refine_timer_.cancel();
+    send(nlohmann::json{{"type", "cancelled"}, {"request", request_}, {"frame_cancelled", had}}
+             .dump(),
+         false);
+    return;
   } else {
     m.finish();
     send(nlohmann::json{{"type", "pong"}}.dump(), false);
@@ -302,13 +388,15 @@ void WsSession::start_frame(std::optional<RefineStep> step) {
   f.lights = lights_;
   bool reduced = !step;
   if (reduced) {  // cheaper while the user interacts
-    f.width = std::max(1, scene_->width / 2);
-    f.height = std::max(1, scene_->height / 2);
+    const Reduced& c = reduced_[pipeline_];
+    f.width = std::max(1, static_cast<int>(std::lround(scene_->width * c.scale)));
+    f.height = std::max(1, static_cast<int>(std::lround(scene_->height * c.scale)));
   }
   if (!step || step->stage == RefineStep::Stage::Full) {  // the session's own frames
     f.pipeline = pipeline_;
     f.terms = terms_;
-    f.settings = settings_;
+    f.settings =
+        reduced && reduced_[pipeline_].draft ? with_draft(pipeline_, settings_) : settings_;
     f.max_error = max_error_;
   } else {
     f.pipeline = step->pipeline;
@@ -316,6 +404,7 @@ void WsSession::start_frame(std::optional<RefineStep> step) {
     f.settings = step->settings;
   }
   f.scene_load_ms = std::exchange(scene_load_ms_, 0);
+  frame_format_ = !reduced && std::exchange(snapshot_, false) ? "exr" : format_;
   f.max_seconds = options_.max_render_s;
   last_frame_reduced_ = reduced;
   frame_step_ = std::move(step);
@@ -340,12 +429,28 @@ void WsSession::start_frame(std::optional<RefineStep> step) {
     on_rendered(frame, reduced, RenderOutcome{std::nullopt, 503, "the server is stopping", "", 0});
 }
 
+// Steers the next reduced frames of the session's pipeline towards kFrameBudgetMs: the side
+// scale follows sqrt(budget / measured) (pixels cost about linearly), between 1/4 and 1/2; at 1/4
+// and still over budget, the draft frame settings too.
+void WsSession::measure_reduced(const RenderResult& r) {
+  double ms = 0;
+  for (const auto& t : r.timings)
+    if (t.stage != "scene_load") ms += t.ms;
+  if (ms <= 0) return;
+  Reduced& c = reduced_[pipeline_];
+  double wanted = c.scale * std::sqrt(kFrameBudgetMs / ms);
+  if (wanted < 0.25 && !c.draft) c.draft = true;
+  c.scale = std::clamp(wanted, 0.25, 0.5);
+}
+
 void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
   if (closed_ || frame != in_flight_) return;  // the client left or moved meanwhile: not sent
+  if (reduced && o.result && !frame_step_) measure_reduced(*o.result);
   if (!o.result) {
     in_flight_ = 0;  // no frame to ack
     if (frame_step_) refine_.stop();
-    nlohmann::json e = {{"type", "error"}, {"error", o.error}, {"frame", frame}};
+    nlohmann::json e = {
+        {"type", "error"}, {"error", o.error}, {"frame", frame}, {"request", request_}};
     if (!o.field.empty()) e["field"] = o.field;
     send(e.dump(), false);
     return;
@@ -371,47 +476,48 @@ void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
 // Encoded on the worker pool, then sent from this strand. `extra`: header fields beyond the
 // render's own.
 void WsSession::send_frame(long long frame, bool reduced, RenderOutcome o, nlohmann::json extra) {
-  boost::asio::post(
-      workers_, [self = shared_from_this(), frame, reduced, o = std::move(o), format = format_,
-                 extra = std::move(extra), cam_rev = frame_camera_revision_,
-                 light_rev = frame_light_revision_]() mutable {
-        RenderResult& r = *o.result;
-        nlohmann::json timings = nlohmann::json::object();
-        for (const auto& t : r.timings) timings[t.stage] = t.ms;
-        nlohmann::json header;
-        std::string bytes;
-        try {
-          header = {{"type", "frame"},
-                    {"frame", frame},
-                    {"camera_revision", cam_rev},
-                    {"light_revision", light_rev},
-                    {"pipeline", r.plan.pipeline},
-                    {"plan", r.plan},
-                    {"timings_ms", timings},
-                    {"queue_wait_ms", o.wait_ms},
-                    {"width", r.image.width},
-                    {"height", r.image.height},
-                    {"format", format},
-                    {"reduced", reduced}};
-          if (r.error_estimate) header["error_estimate"] = *r.error_estimate;
-          header.update(extra);
-          bytes = encode_image(r.image, format);
-        } catch (const std::exception& e) {
-          header = {{"type", "error"}, {"error", e.what()}, {"frame", frame}};
-        }
-        boost::asio::post(self->ws_.get_executor(), [self, frame, header = std::move(header),
-                                                     bytes = std::move(bytes)]() mutable {
-          if (self->closed_ || frame != self->in_flight_) return;
-          if (header["type"] != "frame") {
-            self->in_flight_ = 0;
-            self->send(header.dump(), false);
-            return self->maybe_render();
-          }
-          self->send(header.dump(), false);
-          self->send(std::move(bytes), true);
-          self->awaiting_ack_ = true;
-        });
-      });
+  boost::asio::post(workers_, [self = shared_from_this(), frame, reduced, o = std::move(o),
+                               format = frame_format_, extra = std::move(extra),
+                               cam_rev = frame_camera_revision_, light_rev = frame_light_revision_,
+                               request = request_, exposure = exposure_]() mutable {
+    RenderResult& r = *o.result;
+    nlohmann::json timings = nlohmann::json::object();
+    for (const auto& t : r.timings) timings[t.stage] = t.ms;
+    nlohmann::json header;
+    std::string bytes;
+    try {
+      header = {{"type", "frame"},
+                {"frame", frame},
+                {"camera_revision", cam_rev},
+                {"light_revision", light_rev},
+                {"pipeline", r.plan.pipeline},
+                {"plan", r.plan},
+                {"timings_ms", timings},
+                {"queue_wait_ms", o.wait_ms},
+                {"width", r.image.width},
+                {"height", r.image.height},
+                {"format", format},
+                {"reduced", reduced},
+                {"request", request}};
+      if (r.error_estimate) header["error_estimate"] = *r.error_estimate;
+      header.update(extra);
+      bytes = encode_image(r.image, format, ToneMap{exposure});
+    } catch (const std::exception& e) {
+      header = {{"type", "error"}, {"error", e.what()}, {"frame", frame}};
+    }
+    boost::asio::post(self->ws_.get_executor(), [self, frame, header = std::move(header),
+                                                 bytes = std::move(bytes)]() mutable {
+      if (self->closed_ || frame != self->in_flight_) return;
+      if (header["type"] != "frame") {
+        self->in_flight_ = 0;
+        self->send(header.dump(), false);
+        return self->maybe_render();
+      }
+      self->send(header.dump(), false);
+      self->send(std::move(bytes), true);
+      self->awaiting_ack_ = true;
+    });
+  });
 }
 
 void WsSession::send(std::string message, bool binary) {

@@ -3,23 +3,34 @@
 //
 //   {"type": "hello", "scene_name": "bunny" | "scene": {...}, "pipeline": "surface",
 //    "terms": "...", "format": "jpg" | "png", "settings": {...},
-//    "quality": {"max_error": E, "refine_floor": F}}
+//    "quality": {"max_error": E, "refine_floor": F}, "exposure": X,
+//    "request": n, "keep_view": true,     keep_view: the session's camera and lights stay
+//    "medium": {...}}                     with scene_name: that scene in another medium
+//
+// After a hello with a "request" (> 0) is applied the server says {"type": "scene", "request",
+// "scene_name", "source" (the scene's JSON, for a client to edit), "camera", "lights", "bounds":
+// {"min", "max"}, "scenes" (names in --scenes-dir)}; frame headers and errors carry the hello's
+// "request", so a client drops frames of a scene it no longer shows.
 //   {"type": "camera", "position": [..], "target": [..], "up": [..], "fov_deg": 40, "revision": n}
 //   {"type": "lights", "lights": [...], "revision": n}
+//   {"type": "cancel"}                    stops the frame in flight (not yet sent) and the
+//   refinement
 //   {"type": "ack", "frame": id}
 //   {"type": "ping"}                      keeps a still session alive; answered {"type": "pong"}
 //
 // Latest wins: camera and light messages only replace the session's state; a frame renders the
 // newest state when it starts, so stale poses are never rendered. At most one frame is in flight:
 // from the moment it is queued until the client acks it, and an ack counts only for that frame.
-// While poses keep coming frames are rendered at half size; after ~200 ms without a change (and
-// after a hello) the still view is refined (server/refine.hpp): the full-size frame (header
-// "reduced": false), the pipeline's higher qualities, then accumulated reference passes, each
-// refined frame's header with "error_estimate" and "refine": {"stage", "state", ...}, sent only
-// when its estimate dropped by a tenth, until it is under refine_floor or the passes run out. A
-// refinement step whose result is not sent frees the slot at once (nothing to ack) and is told
-// as {"type": "refine", "refine", "error_estimate", "shown_error_estimate"}. A camera,
-// lights or hello message cancels a still frame not yet sent (its render stops at its next
+// While poses keep coming frames are rendered reduced, at a scale chosen per pipeline from its
+// measured reduced-frame times against kFrameBudgetMs (between 1/4 and 1/2 of each side, then the
+// pipeline's draft frame settings where 1/4 is still over budget); after
+// ~200 ms without a change (and after a hello) the still view is refined (server/refine.hpp): the
+// full-size frame (header "reduced": false), the pipeline's higher qualities, then accumulated
+// reference passes, each refined frame's header with "error_estimate" and "refine": {"stage",
+// "state", ...}, sent only when its estimate dropped by a tenth, until it is under refine_floor or
+// the passes run out. A refinement step whose result is not sent frees the slot at once (nothing to
+// ack) and is told as {"type": "refine", "refine", "error_estimate", "shown_error_estimate"}. A
+// camera, lights or hello message cancels a still frame not yet sent (its render stops at its next
 // progress check; the new pose's job queues behind it). Each session otherwise has at most one
 // job on the render thread's FIFO queue, so sessions take turns. The render thread posts the
 // result here; it is encoded on the worker pool and sent from this session's strand.
@@ -34,6 +45,7 @@
 #include <boost/beast.hpp>
 #include <boost/beast/websocket.hpp>
 #include <deque>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -47,6 +59,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
   static constexpr size_t kMaxQueuedWrites = 32;
   static constexpr size_t kMaxBacklog = 64;  // messages held while a hello's scene loads
+  // What a reduced frame (while the user drags) aims to take, render only, in milliseconds.
+  static constexpr double kFrameBudgetMs = 80;
 
   // Holds one of the Api's session slots (taken by the caller) and gives it back when it ends.
   WsSession(boost::asio::ip::tcp::socket&& socket, Api& api, boost::asio::thread_pool& workers);
@@ -59,7 +73,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void dispatch(std::string text);
   void handle(const std::string& text);
   void read_hello(nlohmann::json msg);
-  void apply_hello(Api::RenderSpec spec);
+  void apply_hello(Api::RenderSpec spec, bool keep_view, nlohmann::json scene_message);
   void maybe_render();
   void start_frame(std::optional<RefineStep> step);
   void on_rendered(long long frame, bool reduced, RenderOutcome outcome);
@@ -88,6 +102,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   Camera camera_;
   std::vector<Light> lights_;
   std::string pipeline_ = "surface", terms_, format_ = "jpg";
+  bool snapshot_ = false;             // the next still frame goes out as EXR ("snapshot")
+  std::string frame_format_ = "jpg";  // the frame in flight's
   Settings settings_;
   std::optional<double> max_error_;  // the hello's quality.max_error, for the session's frames
   double refine_floor_ = 0.01;       // the hello's quality.refine_floor
@@ -106,6 +122,16 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   std::chrono::steady_clock::time_point last_change_, last_message_;
   boost::asio::steady_timer refine_timer_, idle_timer_;
   long long next_frame_ = 1;
+  long long request_ = 0;  // the applied hello's "request", echoed in frame headers
+  double exposure_ = 1.0;
+  // Reduced frames, per pipeline: the scale of each side, and whether the pipeline's draft
+  // quality (its settings that shape only the frame) is used, steered by measured frame times.
+  struct Reduced {
+    double scale = 0.5;
+    bool draft = false;
+  };
+  std::map<std::string, Reduced> reduced_;
+  void measure_reduced(const RenderResult& r);
   bool hello_pending_ = false;
   bool holds_slot_ = true;  // the Api's session slot, given back once (at end() or destruction)
   std::deque<std::string> backlog_;

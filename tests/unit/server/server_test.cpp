@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <boost/beast.hpp>
 #include <chrono>
 #include <iostream>
@@ -182,6 +183,107 @@ TEST_F(ServerTest, WebSocketBadMessagesGetErrorsAndTheConnectionStays) {
   c.send(hello());  // still usable
   std::string image;
   EXPECT_EQ(c.next_frame(image)["type"], "frame");
+  c.close();
+}
+
+// A hello with a request id: the scene message describes what the session shows, frames carry
+// the id, keep_view keeps the pose a later hello would otherwise reset, and cancel is answered.
+TEST_F(ServerTest, WebSocketHelloRequestKeepViewAndCancel) {
+  WsClient c(server_->port());
+  nlohmann::json h = hello();
+  h["request"] = 7;
+  c.send(h);
+  nlohmann::json scene = c.next_json();
+  ASSERT_EQ(scene["type"], "scene") << scene.dump();
+  EXPECT_EQ(scene["request"], 7);
+  EXPECT_EQ(scene["kept_view"], false);
+  EXPECT_EQ(scene["source"], h["scene"]);
+  EXPECT_EQ(scene["lights"].size(), 1u);
+  EXPECT_EQ(scene["lights"][0]["type"], "directional");
+  EXPECT_NEAR(scene["bounds"]["max"][0].get<double>(), 1.0, 0.01);
+  EXPECT_NEAR(scene["camera"]["position"][2].get<double>(), 4.0, 1e-9);
+  EXPECT_TRUE(std::find(scene["scenes"].begin(), scene["scenes"].end(), "cube-torus") !=
+              scene["scenes"].end())
+      << scene["scenes"].dump();
+  std::string image;
+  nlohmann::json f = c.next_frame(image);
+  ASSERT_EQ(f["type"], "frame") << f.dump();
+  EXPECT_EQ(f["request"], 7);
+  c.send({{"type", "ack"}, {"frame", f["frame"]}});
+  c.send(pose(50));
+  // The same view by another request, keeping the pose: the scene message says the pose sent.
+  h["request"] = 8;
+  h["keep_view"] = true;
+  c.send(h);
+  // The next message that is not a frame; frames meanwhile (their request noted) are acked.
+  std::vector<long long> requests;
+  auto next_other = [&] {
+    for (;;) {
+      nlohmann::json m = c.next_frame(image);
+      if (m["type"] != "frame") return m;
+      requests.push_back(m["request"]);
+      c.send({{"type", "ack"}, {"frame", m["frame"]}});
+    }
+  };
+  nlohmann::json m = next_other();
+  ASSERT_EQ(m["type"], "scene") << m.dump();
+  EXPECT_EQ(m["request"], 8);
+  EXPECT_EQ(m["kept_view"], true);
+  EXPECT_NEAR(m["camera"]["position"][0].get<double>(), pose(50)["position"][0].get<double>(),
+              1e-9);
+  requests.clear();
+  c.send({{"type", "cancel"}});
+  m = next_other();
+  EXPECT_EQ(m["type"], "cancelled") << m.dump();
+  EXPECT_EQ(m["request"], 8);
+  for (long long r : requests) EXPECT_EQ(r, 8);
+  c.close();
+}
+
+// A snapshot: the current view's next full-size frame comes as linear EXR.
+TEST_F(ServerTest, WebSocketSnapshotIsAnExrFrame) {
+  WsClient c(server_->port());
+  c.send(hello());
+  std::string image;
+  nlohmann::json f = c.next_frame(image);
+  ASSERT_EQ(f["type"], "frame") << f.dump();
+  EXPECT_EQ(f["format"], "png");
+  c.send({{"type", "snapshot"}});
+  c.send({{"type", "ack"}, {"frame", f["frame"]}});
+  for (int i = 0; i < 5; ++i) {  // refinement frames may come first; the snapshot follows
+    f = c.next_frame(image);
+    ASSERT_EQ(f["type"], "frame") << f.dump();
+    c.send({{"type", "ack"}, {"frame", f["frame"]}});
+    if (f["format"] == "exr") break;
+  }
+  EXPECT_EQ(f["format"], "exr");
+  EXPECT_EQ(f["width"], 64);
+  EXPECT_EQ(image.substr(0, 4), std::string("\x76\x2f\x31\x01", 4));
+  c.close();
+}
+
+// A hello's "medium" renders a shipped scene in another medium; a bad one names its field.
+TEST_F(ServerTest, WebSocketHelloMediumOverridesAShippedScene) {
+  WsClient c(server_->port());
+  nlohmann::json h = {{"type", "hello"},
+                      {"scene_name", "sphere"},
+                      {"pipeline", "surface"},
+                      {"request", 1},
+                      {"medium", {{"sigma_s", {5, 1, 1}}, {"g", 5}}}};
+  c.send(h);
+  nlohmann::json e = c.next_json();
+  EXPECT_EQ(e["type"], "error");
+  EXPECT_EQ(e["field"], "medium.g") << e.dump();
+  EXPECT_EQ(e["request"], 1);
+  h["medium"]["g"] = 0.5;
+  h["request"] = 2;
+  c.send(h);
+  nlohmann::json scene = c.next_json();
+  ASSERT_EQ(scene["type"], "scene") << scene.dump();
+  EXPECT_EQ(scene["source"]["medium"]["sigma_s"][0], 5);
+  EXPECT_EQ(scene["source"]["mesh"]["shape"], "sphere");
+  std::string image;
+  EXPECT_EQ(c.next_frame(image)["request"], 2);
   c.close();
 }
 

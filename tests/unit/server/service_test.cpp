@@ -309,5 +309,41 @@ TEST_F(ServiceTest, PercentEncodedTokensMatch) {
   EXPECT_NO_THROW(Ws(port(), std::string("/api/ws?token=a%2Bb%2Fc%3Dd%26e")));
 }
 
+// The page opened with /?token=T sets a cookie that later requests carry instead of the token;
+// a wrong token on the page is an HTML page, on the API JSON.
+TEST_F(ServiceTest, ThePageKeepsItsTokenInACookie) {
+  TearDown();
+  ServerOptions o;
+  o.api.token = "a+b/c=d&e";
+  start(o);
+  auto page = request(port(), http::verb::get, "/?token=a%2Bb%2Fc%3Dd%26e");
+  EXPECT_EQ(page.result_int(), 200);
+  std::string cookie(page[http::field::set_cookie]);
+  EXPECT_EQ(cookie.substr(0, cookie.find(';')), "scatter_token=a%2Bb%2Fc%3Dd%26e") << cookie;
+  EXPECT_NE(cookie.find("HttpOnly"), std::string::npos);
+  auto with_cookie = [&](const std::string& target, const std::string& value) {
+    boost::asio::io_context io;
+    beast::tcp_stream stream(io);
+    stream.connect({boost::asio::ip::make_address("127.0.0.1"), port()});
+    http::request<http::string_body> req{http::verb::get, target, 11};
+    req.set(http::field::host, "127.0.0.1");
+    req.set(http::field::cookie, "other=1; " + value);
+    http::write(stream, req);
+    beast::flat_buffer buffer;
+    http::response<http::string_body> res;
+    http::read(stream, buffer, res);
+    return res.result_int();
+  };
+  EXPECT_EQ(with_cookie("/app.js", cookie.substr(0, cookie.find(';'))), 200);
+  EXPECT_EQ(with_cookie("/api/health", cookie.substr(0, cookie.find(';'))), 200);
+  EXPECT_EQ(with_cookie("/app.js", "scatter_token=wrong"), 401);
+  auto wrong = request(port(), http::verb::get, "/?token=wrong");
+  EXPECT_EQ(wrong.result_int(), 401);
+  EXPECT_NE(std::string(wrong[http::field::content_type]).find("text/html"), std::string::npos);
+  EXPECT_NE(wrong.body().find("needs a token"), std::string::npos);
+  EXPECT_EQ(request(port(), http::verb::get, "/api/health?token=wrong").body().substr(0, 9),
+            "{\"error\":");
+}
+
 }  // namespace
 }  // namespace scatter::server
