@@ -295,9 +295,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   uniform1i(splat, "clip_back", s.clip_back ? 1 : 0);
   // exact_tr with a peaked phase: each light's share without its phase, which the fragment takes
   // per view ray (kPerRayPhaseG in single_pipeline.hpp).
-  uniform1i(
-      splat, "per_ray_phase",
-      s.exact_tr && !scene.lights.empty() && std::abs(scene.medium.g) >= kPerRayPhaseG ? 1 : 0);
+  uniform1i(splat, "per_ray_phase", s.exact_tr && phase_per_ray(scene) ? 1 : 0);
   glProgramUniform1f(splat, glGetUniformLocation(splat, "g"), float(scene.medium.g));
   set_light_uniforms(splat, scene.lights);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, s.exact_tr ? light_factors_.get() : 0);

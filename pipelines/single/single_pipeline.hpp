@@ -19,6 +19,7 @@
 // included (ior is neglected, and the plan says so).
 #pragma once
 
+#include <cmath>
 #include <map>
 #include <memory>
 #include <string>
@@ -36,6 +37,9 @@ namespace scatter {
 // phase is narrower than a Gaussian seen from the camera); below, per sample at its centre, which
 // costs the fragment nothing (docs/pipelines/single.md).
 inline constexpr double kPerRayPhaseG = 0.5;
+inline bool phase_per_ray(const Scene& scene) {
+  return !scene.lights.empty() && std::abs(scene.medium.g) >= kPerRayPhaseG;
+}
 
 struct SingleSettings {
   SingleBakeParams bake;

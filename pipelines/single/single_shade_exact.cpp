@@ -97,8 +97,10 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
   cl.queue().enqueueReadBuffer(cl_shift_, CL_TRUE, 0, shift.size() * sizeof(float), shift.data());
   cl.queue().enqueueReadBuffer(cl_axes_, CL_TRUE, 0, axes.size() * sizeof(float), axes.data());
   cl.queue().enqueueReadBuffer(cl_cut_, CL_TRUE, 0, cut.size() * sizeof(float), cut.data());
-  std::vector<float> shares(per_light_floats, 0.f);
-  if (!scene.lights.empty())
+  // The per-light shares only where the splat reads them (no readback on the hot path otherwise).
+  const bool per_ray = phase_per_ray(scene);
+  std::vector<float> shares(per_ray ? per_light_floats : 0, 0.f);
+  if (per_ray)
     cl.queue().enqueueReadBuffer(cl_light_factor_, CL_TRUE, 0,
                                  size_t(b.count) * 4 * scene.lights.size() * sizeof(float),
                                  shares.data());
@@ -111,8 +113,9 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
                        axes.data());
   glNamedBufferSubData(cuts_.get(), 0, static_cast<GLsizeiptr>(cut.size() * sizeof(float)),
                        cut.data());
-  glNamedBufferSubData(light_factors_.get(), 0,
-                       static_cast<GLsizeiptr>(shares.size() * sizeof(float)), shares.data());
+  if (per_ray)
+    glNamedBufferSubData(light_factors_.get(), 0,
+                         static_cast<GLsizeiptr>(shares.size() * sizeof(float)), shares.data());
 }
 
 }  // namespace scatter
