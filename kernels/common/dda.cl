@@ -108,3 +108,20 @@ float optical_depth(const Grid* g, __global const float* sigma_t, int channel, f
   while (dda_next(&s, &a, &b, &c)) tau += sigma_t[3 * voxel_index(g, c.x, c.y, c.z) + channel] * (b - a);
   return tau;
 }
+
+// The three channels' optical depths along one traversal: per channel the same sums, in the same
+// order, as optical_depth (a third of its traversals where all three are needed).
+float3 optical_depth3(const Grid* g, __global const float* sigma_t, float3 o, float3 d, float t0, float t1) {
+  float g0, g1;
+  if (!grid_interval(g, o, d, &g0, &g1)) return (float3)(0.0f);
+  g0 = fmax(g0, t0);
+  g1 = fmin(g1, t1);
+  if (g1 <= g0) return (float3)(0.0f);
+  Dda s;
+  dda_init(&s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), g0, g1);
+  float3 tau = (float3)(0.0f);
+  float a, b;
+  int3 c;
+  while (dda_next(&s, &a, &b, &c)) tau += vload3(voxel_index(g, c.x, c.y, c.z), sigma_t) * (b - a);
+  return tau;
+}

@@ -18,8 +18,8 @@
 
 // Optical depth of the channel mean from o towards d over [0, t1].
 float mean_depth(const Grid* g, __global const float* sigma_t, float3 o, float3 d, float t1) {
-  return (optical_depth(g, sigma_t, 0, o, d, 0.0f, t1) + optical_depth(g, sigma_t, 1, o, d, 0.0f, t1) +
-          optical_depth(g, sigma_t, 2, o, d, 0.0f, t1)) / 3.0f;
+  float3 tau = optical_depth3(g, sigma_t, o, d, 0.0f, t1);
+  return (tau.x + tau.y + tau.z) / 3.0f;
 }
 
 bool in_medium(const Grid* g, __global const float* sigma_t, float3 p) {
@@ -80,14 +80,15 @@ __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, in
   Grid grid = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
   float3 b = vload3(i, at);
   Light L = load_light(lights, light);
+  float3 wl;
+  float dist;
+  light_irradiance(L, b, 0, &wl, &dist);  // the direction and distance of every channel
+  float3 taus = optical_depth3(&grid, sigma_t, b, wl, 0.0f, dist);
+  float tau_ch[3] = {taus.x, taus.y, taus.z};
   float mean = 0.0f;
   for (int ch = 0; ch < 3; ++ch) {
-    float3 wl;
-    float dist;
-    light_irradiance(L, b, ch, &wl, &dist);
-    float tau = optical_depth(&grid, sigma_t, ch, b, wl, 0.0f, dist);
-    out[3 * i + ch] = exp(-tau);
-    mean += tau / 3.0f;
+    out[3 * i + ch] = exp(-tau_ch[ch]);
+    mean += tau_ch[ch] / 3.0f;
   }
   if (!gradient) return;
   int directional = L.type == 1;
@@ -122,8 +123,10 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   float3 light_g = (float3)(0.0f), light_c = (float3)(0.0f);
   float light_w = 0.0f;
   float tau_min = INFINITY;  // the least optical depth (eye plus a light) of any channel that adds
+  float3 view_taus = optical_depth3(&grid, sigma_t, b, v, 0.0f, de);
+  float view_tau[3] = {view_taus.x, view_taus.y, view_taus.z};
   for (int ch = 0; ch < 3; ++ch) {
-    float tau = optical_depth(&grid, sigma_t, ch, b, v, 0.0f, de);
+    float tau = view_tau[ch];
     view_mean += tau / 3.0f;
     float view = exp(-tau);
     float sum = 0.0f;
