@@ -97,9 +97,17 @@ CostEstimate SinglePipeline::estimate(const Scene& scene, const RenderRequest& r
         "settings.samples", pieces * (1 + lights) * side * 20e-9,
         std::to_string(p.samples) + " samples x " + std::to_string(int(lights + 1)) + " rays");
   const double overlap = 9 * std::cbrt(samples);
-  frame.time("scene.image.width", px * coverage(scene) * overlap * 60e-9 + px * 4 * 200e-9,
+  // splat_scale: one pixel in stride x stride splatted (auto: by the sigma the spacing of
+  // `samples` in the mesh's box gives).
+  Aabb box = scene.mesh->bounds();
+  const Vec3 size = box.size();
+  const double sigma = p.radius * std::cbrt(size.x * size.y * size.z / samples);
+  const int stride = splat_stride(s.splat_scale, sigma, scene);
+  frame.time("scene.image.width",
+             px * coverage(scene) * overlap * 60e-9 / (stride * stride) + px * 4 * 200e-9,
              std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px x " +
-                 std::to_string(int(overlap)) + " Gaussians splatted");
+                 std::to_string(int(overlap)) + " Gaussians splatted" +
+                 (stride > 1 ? " at one pixel in " + std::to_string(stride * stride) : ""));
   baking.peak_of(frame);
   return baking.finish("single");
 }

@@ -1,4 +1,5 @@
 // `single` in the registry: its settings table and description.
+#include "core/errors.hpp"
 #include "pipelines/registry.hpp"
 #include "pipelines/single/sh.hpp"
 #include "pipelines/single/single_pipeline.hpp"
@@ -37,6 +38,10 @@ const SettingsTable<SingleSettings>& single_settings() {
        setting("adapt", &S::bake, &B::adapt, 0.0, 1.0, baked(),
                "the spacing's range [r/2, 2r] raised to this power: 1 the paper's rule, 0 uniform"),
        setting("seed", &S::bake, &B::seed, 0, 1 << 30, baked(), "random seed of the sampling"),
+       setting("splat_scale", &S::splat_scale, 0.0, 1.0, frame(),
+               "the splat's size over the image's, upsampled along the view rays' chords (0: "
+               "half where the median Gaussian spans at least 4 pixels, else full; else at "
+               "least 0.25)"),
        flag("clip_back", &S::clip_back, frame(),
             "1: clip to the medium's first two intervals along the ray by depth peeling; 0: the "
             "paper's "
@@ -56,7 +61,13 @@ const SettingsTable<SingleSettings>& single_settings() {
        flag("tr_hessian", &S::tr_hessian, frame(),
             "with tr_gradient: the optical depth's curvature per axis stretches or narrows each "
             "Gaussian")},
-      [](const SingleSettings& s) { s.bake.check(); });
+      [](const SingleSettings& s) {
+        s.bake.check();
+        if (s.splat_scale > 0 && s.splat_scale < 0.25)
+          throw ValidationError("settings.splat_scale",
+                                "splat_scale must be 0 (auto) or within [0.25, 1] (got " +
+                                    std::to_string(s.splat_scale) + ")");
+      });
   return table;
 }
 

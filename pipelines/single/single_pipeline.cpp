@@ -2,8 +2,11 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cmath>
 #include <functional>
 #include <map>
+#include <numbers>
 #include <string_view>
 
 #include "bake/cache.hpp"
@@ -33,6 +36,12 @@ std::string SinglePipeline::product_key(const Scene& scene, const SingleSettings
 }
 
 namespace {
+
+double median(std::vector<float> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
 
 gpu::GlObject storage(const std::vector<float>& data) {
   auto b = gpu::GlObject::create(gpu::GlKind::Buffer);
@@ -139,6 +148,15 @@ BakeResult SinglePipeline::bake(const Scene& scene, const SingleSettings& s, con
     }
     clock.stop(r.cache_hit ? "cache" : "bake");
     current_ = {fp, hex, std::move(product), scene.medium.density, grid_ptr, false, false};
+    current_.sigma_median = median(current_.bake->sigma);
+    std::vector<float> st;
+    for (size_t v = 0; v < grid.count(); ++v) {
+      float t = (grid.sigma_s[3 * v] + grid.sigma_a[3 * v] + grid.sigma_s[3 * v + 1] +
+                 grid.sigma_a[3 * v + 1] + grid.sigma_s[3 * v + 2] + grid.sigma_a[3 * v + 2]) /
+                3;
+      if (t > 0) st.push_back(t);
+    }
+    current_.sigma_t_median = median(std::move(st));
   } else {
     r.cache_hit = true;
     clock.stop("cache");
@@ -157,6 +175,13 @@ BakeResult SinglePipeline::bake(const Scene& scene, const SingleSettings& s, con
              {"bytes", b.position.size() * 4 + b.sigma.size() * 4 + b.weight.size() * 4 +
                            b.sigma_s.size() * 4 + b.plane.size() * 4 + b.sh.size() * 4}};
   return r;
+}
+
+double near_pixels_per_unit(const Scene& scene) {
+  Aabb box = scene.mesh->bounds();
+  double reach = length(box.size()) / 2;
+  double dist = std::max(length(box.center() - scene.camera.position) - reach, 0.25 * reach);
+  return scene.height / 2.0 / (dist * std::tan(scene.camera.fov_deg * std::numbers::pi / 360));
 }
 
 void SinglePipeline::upload() {
@@ -238,6 +263,19 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   MeshBuffers mesh(*scene.mesh);
   CameraMatrices cam = camera_matrices(scene);
   const Vec3& eye = scene.camera.position;
+  // splat_scale: the splat evaluates every stride-th pixel of the image; the upsample below
+  // fills in the rest.
+  const int stride = splat_stride(s.splat_scale, current_.sigma_median, scene);
+  const double sigma_px = current_.sigma_median * near_pixels_per_unit(scene);
+  const int lw = (scene.width + stride - 1) / stride, lh = (scene.height + stride - 1) / stride;
+  for (StagePlan& stage : result.plan.stages)
+    if (stage.name == "splat" && stride > 1)
+      stage.reason += "; one pixel in " + std::to_string(stride) + " x " + std::to_string(stride) +
+                      " (" + std::to_string(lw) + " x " + std::to_string(lh) +
+                      (s.splat_scale > 0 ? ", splat_scale"
+                                         : ": the median Gaussian spans " +
+                                               std::to_string(int(sigma_px)) + " pixels") +
+                      "), the rest interpolated along the view rays' chords";
   RenderTarget front(scene.width, scene.height), back(scene.width, scene.height);
   RenderTarget third(scene.width, scene.height), fourth(scene.width, scene.height);
   const GLuint dist = distance_program_.get();
@@ -285,9 +323,15 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   clock.stop("shade");
 
   const GLuint splat = splat_program_.get();
-  RenderTarget out(scene.width, scene.height);
+  RenderTarget out(lw, lh);
   uniform_matrix(splat, "view_projection", cam.projection * cam.view);
   set_camera_uniforms(splat, scene);
+  uniform1i(splat, "stride", stride);
+  // The image's pixel (stride i, stride j) has its centre 1/2 - 1/(2 stride) of a target pixel
+  // before the target's: move the quads forward by as much (2 / lw in clip space per pixel).
+  const double shift = 0.5 - 0.5 / stride;
+  glProgramUniform2f(splat, glGetUniformLocation(splat, "ndc_shift"), float(2 * shift / lw),
+                     float(2 * shift / lh));
   uniform1i(splat, "front", 0);
   uniform1i(splat, "back", 1);
   uniform1i(splat, "third", 2);
@@ -325,7 +369,39 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glFinish();
   clock.stop("splat");
 
-  result.image = out.read_color();
+  if (stride > 1) {
+    if (!upsample_program_)
+      upsample_program_ =
+          gpu::build_program("shaders/common/fullscreen.vert", "shaders/single/upsample.frag");
+    const GLuint up = upsample_program_.get();
+    RenderTarget full(scene.width, scene.height);
+    const GLuint textures[] = {out.color_texture(), front.color_texture(), back.color_texture(),
+                               third.color_texture(), fourth.color_texture()};
+    const char* names[] = {"low", "front", "back", "third", "fourth"};
+    for (int t = 0; t < 5; ++t) {
+      glBindTextureUnit(GLuint(t), textures[t]);
+      uniform1i(up, names[t], t);
+    }
+    uniform1i(up, "stride", stride);
+    uniform1i(up, "clip_back", s.clip_back ? 1 : 0);
+    glProgramUniform1f(up, glGetUniformLocation(up, "sigma_t"), float(current_.sigma_t_median));
+    glProgramUniform1f(up, glGetUniformLocation(up, "depth_scale"),
+                       float(4 * std::max(current_.sigma_median, 1e-6)));
+    full.bind_and_clear(Vec3{});
+    glDisable(GL_DEPTH_TEST);
+    glUseProgram(up);
+    glBindVertexArray(empty_vao_.get());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+    glUseProgram(0);
+    for (GLuint t = 0; t < 5; ++t) glBindTextureUnit(t, 0);
+    gpu::check_gl("single upsample");
+    glFinish();
+    clock.stop("upsample");
+    result.image = full.read_color();
+  } else {
+    result.image = out.read_color();
+  }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   clock.stop("readback");
   return result;

@@ -19,6 +19,7 @@
 // included (ior is neglected, and the plan says so).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -41,8 +42,23 @@ inline bool phase_per_ray(const Scene& scene) {
   return !scene.lights.empty() && std::abs(scene.medium.g) >= kPerRayPhaseG;
 }
 
+// splat_scale 0 (auto) splats at half size where the median Gaussian's sigma spans at least this
+// many pixels of the full image (its closest part to the eye), then upsamples along the chords
+// (shaders/single/upsample.frag): the splat's fragments fall 4x where they are many and the field
+// is smooth over a pixel.
+inline constexpr double kHalfSplatSigmaPx = 4.0;
+// The pixels per world unit at the medium's near side (its bounding sphere's), where splat_scale
+// auto measures the Gaussians.
+double near_pixels_per_unit(const Scene& scene);
+// The splat's stride for a splat_scale `scale` (0: auto, by a median Gaussian sigma `sigma`).
+inline int splat_stride(double scale, double sigma, const Scene& scene) {
+  if (scale > 0) return std::clamp(int(std::lround(1 / scale)), 1, 4);
+  return sigma * near_pixels_per_unit(scene) >= kHalfSplatSigmaPx ? 2 : 1;
+}
+
 struct SingleSettings {
   SingleBakeParams bake;
+  double splat_scale = 0.0;  // 0: auto (above); else the splat's size over the image's, >= 0.25
   bool clip_back = true;
   bool exact_tr = true;
   bool tr_gradient = true;
@@ -89,8 +105,10 @@ class SinglePipeline : public Pipeline {
     // exact_tr: transmittance to each light and (tr_gradient) its optical depth's gradient, by
     // the light's place and whether the gradient was computed
     std::map<std::string, std::pair<cl::Buffer, cl::Buffer>> light_tr;
-    int light_passes = 0;  // light_tr computations so far (tests)
-    bool moved = false;    // shifts_ / axes_ hold exact_tr's last values
+    int light_passes = 0;       // light_tr computations so far (tests)
+    bool moved = false;         // shifts_ / axes_ hold exact_tr's last values
+    double sigma_median = 0;    // the samples' median Gaussian sigma (splat_scale auto)
+    double sigma_t_median = 0;  // the medium voxels' median extinction (the upsample's guide)
   };
   // The stages of a frame with settings `s` for the asset whose fingerprint is `fp`.
   Plan make_plan(const Scene& scene, Terms terms, const SingleSettings& s,
@@ -109,7 +127,7 @@ class SinglePipeline : public Pipeline {
   BakeCache* cache_;
   std::unique_ptr<BakeCache> own_cache_;
   Current current_;
-  gpu::GlObject distance_program_, shade_program_, splat_program_, empty_vao_;
+  gpu::GlObject distance_program_, shade_program_, splat_program_, upsample_program_, empty_vao_;
   gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_, planes_,
       cuts_, light_factors_;
   cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_sigma_s_, cl_plane_,

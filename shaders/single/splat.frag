@@ -32,7 +32,8 @@ uniform sampler2D third;  // ... to the third (0 where none)
 uniform sampler2D fourth; // ... to the fourth
 uniform int clip_back;
 uniform vec3 eye, forward, right, up;  // right and up scaled by tan(fov / 2) (and aspect)
-uniform vec2 size;
+uniform vec2 size;  // the image's (the depth textures')
+uniform int stride;  // this target's pixel (i, j) is the image's (stride i, stride j)
 
 layout(location = 0) out vec4 radiance;
 
@@ -97,10 +98,11 @@ void clip_chord(vec4 plane, vec3 d, inout float x, inout float y) {
 }
 
 void main() {
-  ivec2 px = ivec2(gl_FragCoord.xy);
+  ivec2 px = ivec2(gl_FragCoord.xy) * stride;
+  if (px.x >= int(size.x) || px.y >= int(size.y)) discard;
   float ta = texelFetch(front, px, 0).r;
   if (ta <= 0.0) discard;
-  vec2 s = gl_FragCoord.xy / size * 2.0 - 1.0;
+  vec2 s = (vec2(px) + 0.5) / size * 2.0 - 1.0;
   vec3 d = normalize(forward + right * s.x + up * s.y);
   // Along the ray x(t) = eye + t d the exponent sum_k (x_k - c_k)^2 / (2 s_k^2) is
   // (A t^2 + 2 B t + C) / 2: a Gaussian in t centred at -B / A.

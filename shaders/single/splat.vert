@@ -18,6 +18,9 @@ layout(std430, binding = 9) readonly buffer Cuts { vec4 cut[]; };
 
 uniform mat4 view_projection;
 uniform vec3 eye;
+// A splat at 1/stride of the image's size evaluates the image's pixel (stride i, stride j) at its
+// pixel (i, j): this moves the quads by the difference of the two centres, in clip space.
+uniform vec2 ndc_shift;
 
 flat out vec3 center;
 flat out vec3 gauss_sigma;
@@ -53,4 +56,5 @@ void main() {
   // The cone from the eye tangent to the ball meets the plane through the centre at this radius.
   float half_size = radius * dist / sqrt(dist * dist - radius * radius);
   gl_Position = view_projection * vec4(center + (u * corner.x + v * corner.y) * half_size, 1.0);
+  gl_Position.xy += ndc_shift * gl_Position.w;
 }

@@ -1,0 +1,72 @@
+#version 450 core
+// The single term at the image's size from a splat that evaluated every stride-th pixel of it
+// (splat_scale): those pixels are copied, the others interpolated. Along a view ray through a
+// thin part of the medium (the rim) the term grows with the ray's chord through the medium, so the
+// interpolation is of the splat's ratio to a guide, 1 - exp(-sigma_t L), L the chord of the ray's
+// two intervals ([1st, 2nd] and [3rd, 4th surface]), times this pixel's own guide: bilinear over
+// the four nearest evaluated pixels, weighted down where their surfaces lie far from this
+// pixel's (an edge in depth: the bunny's ear before its head).
+uniform sampler2D low;  // the evaluated pixels: this pixel's (stride i, stride j) is its (i, j)
+uniform sampler2D front, back, third, fourth;  // distances to the surfaces (0 where none)
+uniform int stride;
+uniform int clip_back;      // 0: the splat clipped at the first surface only (guide 1)
+uniform float sigma_t;      // the guide's extinction (the medium's median)
+uniform float depth_scale;  // a neighbour's weight falls as exp(-(depth difference / this)^2)
+
+layout(location = 0) out vec4 radiance;
+
+// The chord of both intervals (the second only where a third surface lies behind the second).
+float chord(ivec2 p, out float ta, out float tb) {
+  ta = texelFetch(front, p, 0).r;
+  tb = texelFetch(back, p, 0).r;
+  if (clip_back == 0 || tb <= ta) return -1.0;  // unbounded: an open mesh, or front-only clipping
+  float L = tb - ta;
+  float t3 = texelFetch(third, p, 0).r;
+  if (t3 > tb) {
+    float t4 = texelFetch(fourth, p, 0).r;
+    if (t4 <= t3) return -1.0;
+    L += t4 - t3;
+  }
+  return L;
+}
+
+float guide(float L) { return L < 0.0 ? 1.0 : 1.0 - exp(-sigma_t * L); }
+
+void main() {
+  ivec2 px = ivec2(gl_FragCoord.xy);
+  ivec2 q0 = px / stride;
+  ivec2 r = px - q0 * stride;
+  if (r == ivec2(0)) {  // evaluated by the splat
+    radiance = vec4(texelFetch(low, q0, 0).rgb, 0.0);
+    return;
+  }
+  float ta, tb;
+  float L = chord(px, ta, tb);
+  // Unbounded here (no second surface found at a silhouette's edge): no ratio to interpolate.
+  const bool ratio = L >= 0.0;
+  float g = ratio ? guide(L) : 1.0;
+  if (ta <= 0.0 || g <= 0.0) {
+    radiance = vec4(0.0);
+    return;
+  }
+  ivec2 size = textureSize(front, 0);
+  vec2 f = vec2(r) / float(stride);
+  vec3 sum = vec3(0.0);
+  float wsum = 0.0;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      ivec2 c = q0 + ivec2(i, j);
+      ivec2 p = c * stride;
+      if (p.x >= size.x || p.y >= size.y) continue;
+      float la, lb;
+      float ll = chord(p, la, lb);
+      float lg = ratio ? guide(ll) : 1.0;
+      if (la <= 0.0 || lg <= 1e-6) continue;
+      float w = (i == 0 ? 1.0 - f.x : f.x) * (j == 0 ? 1.0 - f.y : f.y);
+      float dz = (la - ta) / depth_scale, db = (lb - tb) / depth_scale;
+      w *= exp(-dz * dz - db * db) + 1e-6;
+      sum += w * texelFetch(low, c, 0).rgb / lg;
+      wsum += w;
+    }
+  radiance = vec4(wsum > 0.0 ? g * sum / wsum : vec3(0.0), 0.0);
+}

@@ -1,0 +1,76 @@
+// splat_scale: the splat evaluates every stride-th pixel and the upsample fills in the rest
+// (shaders/single/upsample.frag).
+#include "single_fixture.hpp"
+
+namespace scatter::single_test {
+namespace {
+
+// The exact-transmittance defaults at a bake small enough for a unit test.
+const Settings kExact = {{"samples", 20000}, {"directions", 64}};
+
+Settings with(Settings s, const std::string& key, double value) {
+  s[key] = value;
+  return s;
+}
+
+// The pixels a half-size splat evaluates (image row 0 is at the top, GL's row 0 at the bottom)
+// are the full-size splat's own, and the interpolated ones stay close to them: the sphere's rim,
+// where the term grows with the chord, is what the chord guide is for.
+TEST_F(SinglePipelineTest, HalfSizeSplatKeepsItsPixelsAndInterpolatesTheRest) {
+  Scene s = small_sphere(128, 32);
+  Image full = pipeline().render(s, {Terms::Single, with(kExact, "splat_scale", 1), nullptr}).image;
+  RenderResult r = pipeline().render(s, {Terms::Single, with(kExact, "splat_scale", 0.5), nullptr});
+  const Image& half = r.image;
+  ASSERT_EQ(half.width, full.width);
+  double peak = 0;
+  for (float v : full.rgb) peak = std::max(peak, double(v));
+  ASSERT_GT(peak, 0);
+  double worst_kept = 0, err = 0, ref = 0;
+  std::vector<uint8_t> mask(size_t(s.width) * s.height, 0);
+  for (int y = 0; y < s.height; ++y)
+    for (int x = 0; x < s.width; ++x) {
+      const bool kept = x % 2 == 0 && (s.height - 1 - y) % 2 == 0;
+      for (int c = 0; c < 3; ++c) {
+        size_t i = (size_t(y) * s.width + x) * 3 + c;
+        double d = double(half.rgb[i]) - full.rgb[i];
+        if (kept) worst_kept = std::max(worst_kept, std::abs(d));
+        err += d * d;
+        ref += double(full.rgb[i]) * full.rgb[i];
+      }
+    }
+  std::printf("kept pixels' worst difference %.2g of the peak; interpolated: %.2f %% relative RMSE\n",
+              worst_kept / peak, 100 * std::sqrt(err / ref));
+  // Kept pixels: the same Gaussians along the same ray (rasterised at another size, so one at
+  // the edge of its quad may fall in or out: measured 1.3e-5 of the peak).
+  EXPECT_LT(worst_kept, 1e-4 * peak);
+  // Measured 2.0 % at this size (a sigma of about 2 pixels; auto halves only from 4).
+  EXPECT_LT(std::sqrt(err / ref), 0.03);
+  EXPECT_NEAR(mean_ratio(half, full), 1.0, 0.005);
+  bool named = false;
+  for (const StagePlan& st : r.plan.stages)
+    named |= st.name == "splat" && st.reason.find("64 x 64") != std::string::npos;
+  EXPECT_TRUE(named) << "the plan says at what size the splat ran";
+}
+
+// auto (splat_scale 0) halves where the median Gaussian spans at least kHalfSplatSigmaPx pixels:
+// at 512 x 512 on the sphere, not at 64 x 64; a scale below 0.25 is refused by name.
+TEST_F(SinglePipelineTest, AutoSplatScaleFollowsTheGaussiansOnScreen) {
+  Scene small = small_sphere(64, 32);
+  Scene large = small_sphere(512, 32);
+  auto splat_reason = [&](const Scene& s) {
+    for (const StagePlan& st : pipeline().render(s, {Terms::Single, kExact, nullptr}).plan.stages)
+      if (st.name == "splat") return st.reason;
+    return std::string();
+  };
+  EXPECT_EQ(splat_reason(small).find("one pixel in"), std::string::npos);
+  EXPECT_NE(splat_reason(large).find("256 x 256"), std::string::npos);
+  try {
+    pipeline().plan(small, {Terms::Single, with(kExact, "splat_scale", 0.1), nullptr});
+    FAIL() << "splat_scale 0.1 was accepted";
+  } catch (const ValidationError& e) {
+    EXPECT_EQ(e.field(), "settings.splat_scale");
+  }
+}
+
+}  // namespace
+}  // namespace scatter::single_test
