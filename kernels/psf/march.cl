@@ -16,7 +16,9 @@
 // That is `model` 0 (the paper's). `model` 1 (`orders`, pipelines/psf/orders.hpp) reads instead
 // the orders' bands on their coarse grid at every sub-step:
 //   multiple: b * (phi_1 HG(g^2) + phi_2 HG(g^3) + phi_rest HG(g_rest)),  g_rest = G / phi_rest
-// weighted by the view transmittance like the single term.
+// weighted by the view transmittance like the single term, plus (`flux`) the P1 part of the
+// diffusive flux J = -D grad(phi) scattered towards the camera: 3 g D / (4 pi) dphi/dt along the
+// view ray (clamped at zero).
 
 typedef struct {
   __global const float4* data;
@@ -85,13 +87,14 @@ float3 lookup3(const Pyramid* P, float3 p, float3 w) {
 
 // The orders' multiply scattered radiance factor at p (before b): each band with its phase.
 float3 orders_at(__global const float4* bands, int nx, int ny, int nz, float3 origin, float cell,
-                 float3 p, float cos_theta, float g) {
+                 float3 p, float cos_theta, float g, float3* fluence) {
   int index[8];
   float weight[8];
   trilinear_corners(nx, ny, nz, origin, cell, p, index, weight);
   float4 b[4] = {(float4)(0.0f), (float4)(0.0f), (float4)(0.0f), (float4)(0.0f)};
   for (int i = 0; i < 8; ++i)
     for (int j = 0; j < 4; ++j) b[j] += weight[i] * bands[4 * index[i] + j];
+  *fluence = b[0].xyz + b[1].xyz + b[2].xyz;
   float out[3];
   for (int c = 0; c < 3; ++c) {
     float rest = channel_of(b[2].xyz, c);
@@ -132,7 +135,7 @@ __kernel void psf_march(float3 origin, float voxel, int nx, int ny, int nz,
                         __global const float* pms, int pms_n, float pms_log_min, float pms_log_max,
                         float theta2, float alpha, float shift, int atten, float spacing,
                         int model, __global const float4* bands, int onx, int ony, int onz,
-                        float ocell, __global float* out) {
+                        float ocell, float4 flux, __global float* out) {
   int px = get_global_id(0), py = get_global_id(1);
   if (px >= width || py >= height) return;
   Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
@@ -146,7 +149,8 @@ __kernel void psf_march(float3 origin, float voxel, int nx, int ny, int nz,
     Dda s;
     dda_init(&s, o, d, origin, voxel, (int3)(nx, ny, nz), t0, t1);
     float3 tr = (float3)(1.0f), ell1 = (float3)(0.0f), tau1 = (float3)(0.0f);
-    float s1 = 0.0f, next_lookup = -INFINITY, a, b;
+    float s1 = 0.0f, next_lookup = -INFINITY, a, b, prev_t = -1.0f;
+    float3 prev_phi = (float3)(0.0f);
     float3 blurred = (float3)(0.0f), weight = (float3)(0.0f);
     int3 c;
     while (dda_next(&s, &a, &b, &c) && fmax(tr.x, fmax(tr.y, tr.z)) > 1e-7f) {
@@ -169,8 +173,26 @@ __kernel void psf_march(float3 origin, float voxel, int nx, int ny, int nz,
           single += tr * wint * ss * lin * hg_phase(cos_theta, g_phase);
         }
         if ((terms & 2) && model == 1) {
-          multiple +=
-              tr * wint * ss * orders_at(bands, onx, ony, onz, origin, ocell, p, cos_theta, g_phase);
+          float3 phi;
+          float3 ms = orders_at(bands, onx, ony, onz, origin, ocell, p, cos_theta, g_phase, &phi);
+          if (flux.x != 0.0f || flux.y != 0.0f || flux.z != 0.0f) {
+            // The diffusive flux -D grad(phi) scattered towards the camera (its P1 part, g):
+            // the fluence's derivative along the ray from the previous sample (or a half cell
+            // ahead at the first).
+            float3 deriv;
+            if (prev_t < 0.0f) {
+              float3 ahead;
+              orders_at(bands, onx, ony, onz, origin, ocell, p + 0.5f * ocell * d, cos_theta,
+                        g_phase, &ahead);
+              deriv = (ahead - phi) / (0.5f * ocell);
+            } else {
+              deriv = (phi - prev_phi) / fmax(tm - prev_t, 1e-6f);
+            }
+            prev_phi = phi;
+            prev_t = tm;
+            ms = fmax(ms + flux.xyz * deriv, 0.0f);
+          }
+          multiple += tr * wint * ss * ms;
         } else if (terms & 2) {
           if (tm >= next_lookup) {
             // The weight and the lookup, at the spacing of figure 9; held in between.

@@ -6,22 +6,29 @@
 // phi_m = blur(q_m)(x + drift * wl) / c_mean; phi_m is added to its band and q_(m+1) = b(x) phi_m
 // (zero where there is no medium: light that leaves does not come back). Volumes are float4 per voxel (RGB, 0), x fastest. After pyramid.cl and march.cl.
 
-// b (sigma_s) averaged over 2^level voxels of the source grid (clipped at its edge): the coarse
-// level's scattering coefficient.
-__kernel void coarse_sigma(__global const float* sigma_s, int nx, int ny, int nz, int level,
-                           __global float4* out, int ox, int oy, int oz) {
+// The coarse level's scattering coefficient for the next order's source: b and c averaged over
+// 2^level voxels of the source grid (clipped at its edge), b capped at the albedo times c_mean.
+// The flights carry light one mean free path 1 / c_mean everywhere, so a voxel denser than the
+// mean collides with no more than all of it: each order keeps at most its albedo of the power.
+__kernel void coarse_sigma(__global const float* sigma_s, __global const float* sigma_t, int nx,
+                           int ny, int nz, int level, float4 c_mean, __global float4* out, int ox,
+                           int oy, int oz) {
   int i = get_global_id(0), j = get_global_id(1), k = get_global_id(2);
   if (i >= ox || j >= oy || k >= oz) return;
   int n = 1 << level;
-  float3 sum = (float3)(0.0f);
+  float3 s = (float3)(0.0f), t = (float3)(0.0f);
   int count = 0;
   for (int z = k * n; z < min((k + 1) * n, nz); ++z)
     for (int y = j * n; y < min((j + 1) * n, ny); ++y)
       for (int x = i * n; x < min((i + 1) * n, nx); ++x) {
-        sum += vload3((z * ny + y) * nx + x, sigma_s);
+        s += vload3((z * ny + y) * nx + x, sigma_s);
+        t += vload3((z * ny + y) * nx + x, sigma_t);
         ++count;
       }
-  out[(k * oy + j) * ox + i] = (float4)(sum / (float)max(count, 1), 0.0f);
+  s /= (float)max(count, 1);
+  t /= (float)max(count, 1);
+  float3 albedo = select(s / t, (float3)(0.0f), isless(t, 1e-30f));
+  out[(k * oy + j) * ox + i] = (float4)(fmin(s, albedo * c_mean.xyz), 0.0f);
 }
 
 // acc = (first ? 0 : acc) + w * x: the flight's Gaussians summed with their weights.

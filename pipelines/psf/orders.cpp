@@ -39,13 +39,17 @@ std::array<double, 3> channel_sums(cl::CommandQueue& queue, const cl::Buffer& b,
 
 }  // namespace
 
+double calibrated_drift(double g) {
+  return std::min(0.5, 2.5 * (1 - g));
+}
+
 int orders_level(const OrderParams& params, float voxel, int levels) {
   if (params.level >= 0) return std::min(params.level, levels - 1);
   const double c =
       std::max({params.mean_sigma_t[0], params.mean_sigma_t[1], params.mean_sigma_t[2]});
   const double spread = c > 0 ? std::sqrt(order_flight(params.g, 1).variance) / c : 1e30;
   int level = 0;
-  while (level < 3 && level + 1 < levels && voxel * std::ldexp(1.0, level + 1) <= spread / 2)
+  while (level < 3 && level + 1 < levels && voxel * std::ldexp(1.0, level + 1) <= spread / 3)
     ++level;
   return level;
 }
@@ -61,6 +65,7 @@ Orders build_orders(gpu::ClContext& cl, const ClMedium& medium, const Pyramid& p
   Orders o;
   o.flights = params.flights;
   o.tail = params.tail;
+  o.drift = params.drift;
   o.level = orders_level(params, medium.voxel, static_cast<int>(pyramid.layout.size()));
   const cl_int4 l = pyramid.layout[o.level];
   o.nx = l.s[1], o.ny = l.s[2], o.nz = l.s[3];
@@ -77,8 +82,10 @@ Orders build_orders(gpu::ClContext& cl, const ClMedium& medium, const Pyramid& p
   cl::Kernel coarse(program(cl), "coarse_sigma"), blur(program(cl), "blur_axis"),
       step(program(cl), "order_step"), add(program(cl), "add_scaled"),
       tail(program(cl), "add_tail");
-  gpu::set_args(coarse, medium.sigma_s, medium.nx, medium.ny, medium.nz, o.level, sigma, o.nx, o.ny,
-                o.nz);
+  cl_float4 c_mean{{0, 0, 0, 0}};
+  for (int c = 0; c < 3; ++c) c_mean.s[c] = static_cast<float>(params.mean_sigma_t[c]);
+  gpu::set_args(coarse, medium.sigma_s, medium.sigma_t, medium.nx, medium.ny, medium.nz, o.level,
+                c_mean, sigma, o.nx, o.ny, o.nz);
   queue.enqueueNDRangeKernel(coarse, cl::NullRange, range(l));
   const std::array<double, 3> first = channel_sums(queue, q, n);
   const std::vector<FlightGaussian> mixture = flight_mixture(params.flights);
@@ -92,7 +99,7 @@ Orders build_orders(gpu::ClContext& cl, const ClMedium& medium, const Pyramid& p
     for (int c = 0; c < 3; ++c) {
       const double st = params.mean_sigma_t[c];
       if (st <= 0) continue;
-      drift.s[c] = static_cast<float>(f.drift / st);
+      drift.s[c] = static_cast<float>(params.drift * f.drift / st);
       inv_c.s[c] = static_cast<float>(1 / st);
     }
     for (size_t i = 0; i < mixture.size(); ++i) {

@@ -23,7 +23,8 @@ struct OrderParams {
   int max_orders = 256;
   int flights =
       3;  // Gaussians per flight: 1, or 3 (the exponential flight's shape; flight_mixture)
-  bool tail = true;  // sum the orders past a steady decay as a geometric series
+  double drift = 0.5;  // the share of the flights' drift applied (calibrated_drift)
+  bool tail = true;    // sum the orders past a steady decay as a geometric series
 };
 
 // An exponential flight (mean 1, isotropic) as Gaussians: per-axis standard deviations and
@@ -42,12 +43,18 @@ struct Orders {
   int count = 0;      // orders computed
   double lambda = 0;  // the decay per order the tail was summed with (0: no tail)
   int flights = 0;    // the parameters it was built with
+  double drift = 0;
   bool tail = false;
   double ms = 0;
 };
 
-// The level the orders run on: the coarsest (at most 3) whose voxel is at most half the first
-// flight's spread in the densest channel, unless `params.level` names one.
+// The share of the walk's drift the orders apply, calibrated against the reference (BENCHMARKS.md:
+// sphere at g 0.7 and 0.9, checked on the bunny at g 0.2): min(0.5, 2.5 (1 - g)). The camera sees
+// the light that turned back, which the walk's mean displacement does not follow.
+double calibrated_drift(double g);
+
+// The level the orders run on: the coarsest (at most 3) whose voxel is at most a third of the
+// first flight's spread in the densest channel, unless `params.level` names one.
 int orders_level(const OrderParams& params, float voxel, int levels);
 
 Orders build_orders(gpu::ClContext& cl, const ClMedium& medium, const Pyramid& pyramid,

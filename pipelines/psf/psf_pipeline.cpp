@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numbers>
 #include <sstream>
 #include <string>
 
@@ -202,13 +203,15 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
                         .mean_sigma_t = medium_.mean_sigma_t,
                         .level = s.level,
                         .flights = s.flights,
+                        .drift = s.drift >= 0 ? s.drift : psf::calibrated_drift(scene.medium.g),
                         .tail = s.tail};
     for (size_t i = 0; i < keys.size(); ++i) {
       const psf::LightVolume& v = medium_.lights.at(keys[i]);
       const int level = psf::orders_level(op, m.voxel, static_cast<int>(v.pyramid.layout.size()));
       auto it = medium_.orders.find(keys[i]);
       if (it != medium_.orders.end() && it->second.level == level &&
-          it->second.flights == s.flights && it->second.tail == s.tail)
+          it->second.flights == s.flights && it->second.tail == s.tail &&
+          it->second.drift == op.drift)
         continue;
       psf::Orders o = psf::build_orders(cl, m, v.pyramid, lights, static_cast<int>(i), op);
       orders_ms += o.ms;
@@ -230,6 +233,15 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
   const float theta2 = static_cast<float>(psf::mean_square_angle(scene.medium.g));
   const float alpha = static_cast<float>(psf::curvature_alpha(scene.medium.g));
   cl::Kernel k(psf::program(cl), "psf_march");
+  // Model 1's flux term: 3 g D / (4 pi) per channel, D = 1 / (3 c) (one flight's) or, flux 2,
+  // 1 / (3 c (1 - g)) (diffusion's, with the reduced coefficient).
+  cl_float4 flux{{0, 0, 0, 0}};
+  for (int c = 0; c < 3 && s.flux > 0; ++c) {
+    const double st = medium_.mean_sigma_t[c], gg = scene.medium.g;
+    if (st <= 0) continue;
+    const double D = 1 / (3 * st * (s.flux == 2 ? 1 - gg : 1.0));
+    flux.s[c] = static_cast<float>(3 * gg * D / (4 * std::numbers::pi));
+  }
   for (size_t i = 0; i < keys.size() && terms; ++i) {
     const psf::LightVolume& v = medium_.lights.at(keys[i]);
     const bool orders = s.model == 1 && (terms & 2);
@@ -242,7 +254,7 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
                   static_cast<float>(medium_.pms.log_min), static_cast<float>(medium_.pms.log_max),
                   theta2, alpha, static_cast<float>(s.shift), s.atten,
                   static_cast<float>(s.spacing), orders ? 1 : 0, o ? o->bands : v.pyramid.data,
-                  o ? o->nx : 1, o ? o->ny : 1, o ? o->nz : 1, o ? o->cell : 1.f, out);
+                  o ? o->nx : 1, o ? o->ny : 1, o ? o->nz : 1, o ? o->cell : 1.f, flux, out);
     queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
     if (request.progress) {
       queue.finish();

@@ -30,6 +30,8 @@ struct PsfSettings {
   int level = -1;
   int flights = 3;
   bool tail = true;
+  int flux = 0;
+  double drift = -1;  // -1: psf::calibrated_drift(g)
   double step = 1;
   double spacing = 1;
   double shift = 8;

@@ -156,6 +156,31 @@ TEST(PsfModel, WalkMeanSquareMatchesAMonteCarloWalk) {
   }
 }
 
+TEST(PsfOrders, FlightMixtureFollowsTheExponentialFlight) {
+  // The radial CDF of isotropic 3D Gaussians (per-axis sigma) against 1 - e^-r, and E r^2 = 2.
+  auto maxwell_cdf = [](double r, double s) {
+    double x = r / s;
+    return std::erf(x / std::sqrt(2.0)) - std::sqrt(2 / kPi) * x * std::exp(-x * x / 2);
+  };
+  for (int flights : {1, 3}) {
+    double worst = 0, weight = 0, r2 = 0;
+    for (const FlightGaussian& f : flight_mixture(flights)) {
+      weight += f.weight;
+      r2 += f.weight * 3 * f.sigma * f.sigma;
+    }
+    for (double r = 0; r < 12; r += 0.01) {
+      double cdf = 0;
+      for (const FlightGaussian& f : flight_mixture(flights))
+        cdf += f.weight * maxwell_cdf(r, f.sigma);
+      worst = std::max(worst, std::fabs(cdf - (1 - std::exp(-r))));
+    }
+    EXPECT_NEAR(weight, 1, 1e-3) << flights;
+    EXPECT_NEAR(r2, 2, 1e-3) << flights;
+    EXPECT_LT(worst, flights == 3 ? 0.054 : 0.37) << flights;
+    EXPECT_GT(worst, flights == 3 ? 0.05 : 0.36) << flights;  // what the header says
+  }
+}
+
 TEST(PsfModel, LevelWidthsAddUp) {
   // Level k's Gaussian widths compose: stored_k^2 = stored_{k-1}^2 + tent variance + (sigma_k
   // voxel_k)^2, and the trilinear reconstruction's 1/6 voxel^2 brings it to level_width(k).
@@ -212,8 +237,8 @@ TEST(PsfPyramid, KernelsMatchTheCpuOperations) {
 }
 
 TEST(PsfOrders, KernelsMatchTheCpuOrders) {
-  // g = 0 (no drift), level 0: order m's fluence is the source blurred by its flight's Gaussian
-  // (per channel: c differs) over c, and the next source is b times it.
+  // g = 0 (no drift), level 0, one Gaussian per flight: order m's fluence is the source blurred by
+  // its flight's Gaussian (per channel: c differs) over c, and the next source is b times it.
   auto& cl = test::shared_gpu().cl();
   const int n = 20;
   Volume3 src = random_volume(n, n, n, 5), b = random_volume(n, n, n, 9);
@@ -222,12 +247,19 @@ TEST(PsfOrders, KernelsMatchTheCpuOrders) {
   m.voxel = 0.1f;
   m.origin = cl_float3{{-1, -1, -1}};
   m.sigma_s = upload(cl, b.rgb);
+  std::vector<float> t = b.rgb;  // albedo 0.9: b stays below 0.9 c_mean, uncapped
+  for (float& x : t) x /= 0.9f;
+  m.sigma_t = upload(cl, t);
   Light sun;
   sun.type = Light::Type::Directional;
   cl::Buffer lights = upload(cl, pack_lights({sun}));
   Pyramid p = build_pyramid(cl, upload4(cl, src), n, n, n, m.voxel);
-  OrderParams params{
-      .g = 0, .mean_sigma_t = {2.0, 2.5, 3.0}, .level = 0, .tolerance = 0, .max_orders = 5};
+  OrderParams params{.g = 0,
+                     .mean_sigma_t = {2.0, 2.5, 3.0},
+                     .level = 0,
+                     .tolerance = 0,
+                     .max_orders = 5,
+                     .flights = 1};
   Orders o = build_orders(cl, m, p, lights, 0, params);
   ASSERT_EQ(o.count, 5);
   ASSERT_EQ(o.nx, n);
