@@ -56,7 +56,7 @@ if [ "$part" = models ]; then
   # Frame times at 512 x 512, 1 light: camera-only change and light change (rebuild=1).
   for m in 0 1; do
     $S bench scenes/sphere.json --pipeline psf --terms all --set model=$m --sweep rebuild=0,1 \
-      --frames 3 --reference-spp 1 --reference "$out/ref-timing-512.exr" \
+      --frames 3 --reference-spp 3 --reference "$out/ref-timing-512.exr" \
       --csv "$out/psf-512-model$m.csv"
   done
   echo "done: $out/psf-*-models-*.csv $out/psf-512-model*.csv"

@@ -44,8 +44,8 @@ std::string unfit(const Way& way, const SceneClass& c) {
     if (p.pipeline == "thickness" && c.light_inside)
       return "thickness: a light inside the object's bounding sphere, which no shadow map sees";
     // psf's orders fly one mean free path for the whole medium: where thin parts carry light much
-    // further, its multiple term is far off (docs/BENCHMARKS.md: layers, contrast 10, 75 %;
-    // bunny, contrast 4, 9 %).
+    // further, its multiple term is far off (docs/BENCHMARKS.md: layers, contrast 10, 32 %;
+    // bunny, contrast 4, 23 %; the target is 25 %).
     if (p.pipeline == "psf" && p.terms != Terms::Single && c.contrast >= kPsfMaxContrast)
       return "psf: a density contrast of " + short_number(c.contrast) +
              " (largest over smallest), whose thin parts carry light further than psf's one mean "

@@ -186,6 +186,7 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
     }
     if (kept.count(keys[i])) continue;
     psf::LightVolume v = psf::build_light_volume(cl, m, lights, static_cast<int>(i));
+    medium_.orders.erase(keys[i]);  // built from the volume just replaced
     light_ms += v.light_ms;
     pyramid_ms += v.pyramid_ms;
     ++light_builds_;

@@ -161,7 +161,7 @@ TEST(Planner, KeepsThicknessAwayFromALightInside) {
 }
 
 // psf's orders fly one mean free path for the whole medium: the layers' density contrast of 10
-// puts its multiple term 75 % off (docs/BENCHMARKS.md), the bunny's noise (contrast 4) 9 %.
+// puts its multiple term 32 % off (docs/BENCHMARKS.md), the bunny's noise (contrast 4) 23 %.
 TEST(Planner, KeepsPsfAwayFromAStrongDensityContrast) {
   auto psf_note = [](const Scene& s) {
     BudgetChoice c = plan_budget(s, Terms::All, Budget{0.5}, {}, table());
