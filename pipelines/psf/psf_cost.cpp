@@ -59,12 +59,15 @@ CostEstimate PsfPipeline::estimate(const Scene& scene, const RenderRequest& requ
   // unit with coverage 0.4). Taken at 35 ns.
   const double steps = side / s.step, covered = px * coverage(scene);
   if (orders) {
-    // Model 1 reads its bands once a sub-step: measured below. Its orders: ~40 orders x 3
-    // Gaussians x 3 axes over the level's voxels, ~60 taps each: measured below.
-    lights.time("scene.image.width", std::max(count, 1) * covered * steps * 40e-9,
+    // Model 1 reads its bands once a sub-step: 512^2 sphere, 66 steps, 2.3 s on a loaded CPU
+    // where model 0 took 10.3 s (estimated below at 16.8 s): in the same proportion, 500 ns a
+    // covered pixel and step.
+    // Its orders, ~40 orders x 3 Gaussians x 3 axes over the level's voxels, ~60 taps each:
+    // 228 ms at 33^3 in the same run, taken at 0.3 ns a tap.
+    lights.time("scene.image.width", std::max(count, 1) * covered * steps * 500e-9,
                 std::to_string(int(covered)) + " covered px x " + std::to_string(count) +
                     " lights x " + std::to_string(int(steps)) + " steps");
-    lights.time("scene.lights", count * level_voxels * 40 * 9 * 60 * 2e-9,
+    lights.time("scene.lights", count * level_voxels * 40 * 9 * 60 * 0.3e-9,
                 std::to_string(count) + " lights x " + std::to_string(int(level_voxels)) +
                     " voxels x ~40 orders");
   } else {
