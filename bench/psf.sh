@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Figures for the psf pipeline in docs/BENCHMARKS.md (about 40 minutes on 2 CPU cores):
-#  (PART=errors or PART=time runs one half.)
+#  (PART=errors or PART=time runs one half; PART=models the model 0 / model 1 table below.)
 #  - error of the multiple term (and of all terms) against the reference path tracer on sphere
 #    (g 0 and 0.9, and albedo 0.5), layers and bunny, over the attenuation choice and the width
 #    formula's shift, 128 x 128;
@@ -31,16 +31,47 @@ s["lights"] = [dict(light, position=[3 * math.cos(a), 2.0, 3 * math.sin(a)], int
 json.dump(s, open(f"{out}/sphere-4lights.json", "w"))
 PY
 small=(--width 128 --height 128 --frames 1)
-part=${PART:-all}  # errors | time | all
+part=${PART:-all}  # models | errors | time | all
+# PART=models: the before/after table of docs/BENCHMARKS.md (issue 16): model 0 (the paper's) and
+# model 1 (orders) against the reference on sphere (g 0, 0.7, 0.9), layers and bunny at 64 x 64,
+# multiple term and all terms. Each reference is rendered once into bench/out/ref-<name>-<terms>-64.exr
+# and reused (all = the marched single term + the Monte Carlo multiple term, bench/psf_compose_all.py).
+if [ "$part" = models ]; then
+  for g in 0.7 0.9; do
+    python3 -c "import json,sys; s=json.load(open('scenes/sphere.json')); s['medium']['g']=$g; json.dump(s, open(sys.argv[1], 'w'))" "$out/sphere-g0${g#0.}.json"
+  done
+  for name in sphere sphere-g07 sphere-g09 layers bunny; do
+    scene=scenes/$name.json; [ -f "$scene" ] || scene=$out/$name.json
+    spp=4096; [ "$name" = sphere-g09 ] && spp=16384
+    tiny=(--width 64 --height 64 --frames 1 --sweep model=0,1)
+    $S bench "$scene" --pipeline psf --terms multiple "${tiny[@]}" --reference-spp $spp \
+      --reference "$out/ref-$name-multiple-64.exr" --csv "$out/psf-$name-models-multiple.csv"
+    $S bench "$scene" --pipeline psf --terms single "${tiny[@]}" \
+      --reference "$out/ref-$name-single-64.exr" --csv "$out/psf-$name-models-single.csv"
+    /usr/bin/python3 bench/psf_compose_all.py "$out/ref-$name-single-64.exr" \
+      "$out/ref-$name-multiple-64.exr" "$out/ref-$name-all-64.exr"
+    $S bench "$scene" --pipeline psf --terms all "${tiny[@]}" \
+      --reference "$out/ref-$name-all-64.exr" --csv "$out/psf-$name-models-all.csv"
+  done
+  # Frame times at 512 x 512, 1 light: camera-only change and light change (rebuild=1).
+  for m in 0 1; do
+    $S bench scenes/sphere.json --pipeline psf --terms all --set model=$m --sweep rebuild=0,1 \
+      --frames 3 --reference-spp 3 --reference "$out/ref-timing-512.exr" \
+      --csv "$out/psf-512-model$m.csv"
+  done
+  echo "done: $out/psf-*-models-*.csv $out/psf-512-model*.csv"
+  exit 0
+fi
+# (The sweeps below are model 0's, the paper's march: --set model=0.)
 [ "$part" = time ] || for scene in scenes/sphere.json "$out/sphere-g09.json" "$out/sphere-albedo05.json" scenes/layers.json scenes/bunny.json; do
   name=$(basename "$scene" .json)
   spp=4096
   [ "$name" = sphere-g09 ] && spp=16384
-  $S bench "$scene" --pipeline psf --terms multiple "${small[@]}" --reference-spp $spp \
+  $S bench "$scene" --pipeline psf --terms multiple --set model=0 "${small[@]}" --reference-spp $spp \
     --sweep atten=0,1,2 --csv "$out/psf-$name-atten.csv"
-  $S bench "$scene" --pipeline psf --terms multiple "${small[@]}" --reference-spp $spp \
+  $S bench "$scene" --pipeline psf --terms multiple --set model=0 "${small[@]}" --reference-spp $spp \
     --sweep shift=0,2,8 --csv "$out/psf-$name-shift.csv"
-  $S bench "$scene" --pipeline psf --terms all "${small[@]}" --reference-spp $spp \
+  $S bench "$scene" --pipeline psf --terms all --set model=0 "${small[@]}" --reference-spp $spp \
     --sweep atten=0,2 --csv "$out/psf-$name-all.csv"
 done
 [ "$part" = errors ] && { echo "done: $out/psf-*.csv"; exit 0; }

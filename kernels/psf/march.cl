@@ -13,6 +13,12 @@
 // per sub-step. A (`atten`): 0 the paper's exp(-tau2) on top of the
 // light volume's own attenuation (the light segment counted twice), 1 nothing more (the view
 // transmittance only), 2 absorption only along the view segment instead of extinction.
+// That is `model` 0 (the paper's). `model` 1 (`orders`, pipelines/psf/orders.hpp) reads instead
+// the orders' bands on their coarse grid at every sub-step:
+//   multiple: b * (phi_1 HG(g^2) + phi_2 HG(g^3) + phi_rest HG(g_rest)),  g_rest = G / phi_rest
+// weighted by the view transmittance like the single term, plus (`flux`) the P1 part of the
+// diffusive flux J = -D grad(phi) scattered towards the camera: 3 g D / (4 pi) dphi/dt along the
+// view ray (clamped at zero).
 
 typedef struct {
   __global const float4* data;
@@ -23,20 +29,29 @@ typedef struct {
   float voxel;  // level 0's voxel
 } Pyramid;
 
-float4 trilinear(__global const float4* data, int offset, int nx, int ny, int nz, float3 origin,
-                 float cell, float3 p) {
+// The 8 voxels around p on a grid of `cell` whose corner is `origin` (clamped to the grid) and
+// their trilinear weights.
+void trilinear_corners(int nx, int ny, int nz, float3 origin, float cell, float3 p, int* index,
+                       float* weight) {
   float3 q = (p - origin) / cell - 0.5f;
   float3 f = q - floor(q);
   int3 c0 = convert_int3(floor(q));
+  for (int j = 0; j < 8; ++j) {
+    int dx = j & 1, dy = (j >> 1) & 1, dz = j >> 2;
+    int x = clamp(c0.x + dx, 0, nx - 1), y = clamp(c0.y + dy, 0, ny - 1),
+        z = clamp(c0.z + dz, 0, nz - 1);
+    index[j] = (z * ny + y) * nx + x;
+    weight[j] = (dx ? f.x : 1.0f - f.x) * (dy ? f.y : 1.0f - f.y) * (dz ? f.z : 1.0f - f.z);
+  }
+}
+
+float4 trilinear(__global const float4* data, int offset, int nx, int ny, int nz, float3 origin,
+                 float cell, float3 p) {
+  int index[8];
+  float weight[8];
+  trilinear_corners(nx, ny, nz, origin, cell, p, index, weight);
   float4 sum = (float4)(0.0f);
-  for (int dz = 0; dz < 2; ++dz)
-    for (int dy = 0; dy < 2; ++dy)
-      for (int dx = 0; dx < 2; ++dx) {
-        int x = clamp(c0.x + dx, 0, nx - 1), y = clamp(c0.y + dy, 0, ny - 1),
-            z = clamp(c0.z + dz, 0, nz - 1);
-        float w = (dx ? f.x : 1.0f - f.x) * (dy ? f.y : 1.0f - f.y) * (dz ? f.z : 1.0f - f.z);
-        sum += w * data[offset + (z * ny + y) * nx + x];
-      }
+  for (int j = 0; j < 8; ++j) sum += weight[j] * data[offset + index[j]];
   return sum;
 }
 
@@ -70,6 +85,27 @@ float3 lookup3(const Pyramid* P, float3 p, float3 w) {
   return (float3)(out[0], out[1], out[2]);
 }
 
+// The orders' multiply scattered radiance factor at p (before b): each band with its phase.
+float3 orders_at(__global const float4* bands, int nx, int ny, int nz, float3 origin, float cell,
+                 float3 p, float cos_theta, float g, float3* fluence) {
+  int index[8];
+  float weight[8];
+  trilinear_corners(nx, ny, nz, origin, cell, p, index, weight);
+  float4 b[4] = {(float4)(0.0f), (float4)(0.0f), (float4)(0.0f), (float4)(0.0f)};
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 4; ++j) b[j] += weight[i] * bands[4 * index[i] + j];
+  *fluence = b[0].xyz + b[1].xyz + b[2].xyz;
+  float out[3];
+  for (int c = 0; c < 3; ++c) {
+    float rest = channel_of(b[2].xyz, c);
+    float g_rest = rest > 0.0f ? clamp(channel_of(b[3].xyz, c) / rest, -0.99f, 0.99f) : 0.0f;
+    out[c] = channel_of(b[0].xyz, c) * hg_phase(cos_theta, g * g) +
+             channel_of(b[1].xyz, c) * hg_phase(cos_theta, g * g * g) +
+             rest * hg_phase(cos_theta, g_rest);
+  }
+  return (float3)(out[0], out[1], out[2]);
+}
+
 // 1 / N(l) from the host's table, linear in ln(l).
 float pms_inv_norm(__global const float* table, int n, float log_min, float log_max, float ell) {
   float x = (log(fmax(ell, 1e-30f)) - log_min) / (log_max - log_min) * (n - 1);
@@ -98,7 +134,8 @@ __kernel void psf_march(float3 origin, float voxel, int nx, int ny, int nz,
                         __global const int4* levels, __global const float* widths, int level_count,
                         __global const float* pms, int pms_n, float pms_log_min, float pms_log_max,
                         float theta2, float alpha, float shift, int atten, float spacing,
-                        __global float* out) {
+                        int model, __global const float4* bands, int onx, int ony, int onz,
+                        float ocell, float4 flux, __global float* out) {
   int px = get_global_id(0), py = get_global_id(1);
   if (px >= width || py >= height) return;
   Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
@@ -112,7 +149,8 @@ __kernel void psf_march(float3 origin, float voxel, int nx, int ny, int nz,
     Dda s;
     dda_init(&s, o, d, origin, voxel, (int3)(nx, ny, nz), t0, t1);
     float3 tr = (float3)(1.0f), ell1 = (float3)(0.0f), tau1 = (float3)(0.0f);
-    float s1 = 0.0f, next_lookup = -INFINITY, a, b;
+    float s1 = 0.0f, next_lookup = -INFINITY, a, b, prev_t = -1.0f;
+    float3 prev_phi = (float3)(0.0f);
     float3 blurred = (float3)(0.0f), weight = (float3)(0.0f);
     int3 c;
     while (dda_next(&s, &a, &b, &c) && fmax(tr.x, fmax(tr.y, tr.z)) > 1e-7f) {
@@ -134,7 +172,28 @@ __kernel void psf_march(float3 origin, float voxel, int nx, int ny, int nz,
           float3 lin = trilinear(l0, 0, nx, ny, nz, origin, voxel, p).xyz;
           single += tr * wint * ss * lin * hg_phase(cos_theta, g_phase);
         }
-        if (terms & 2) {
+        if ((terms & 2) && model == 1) {
+          float3 phi;
+          float3 ms = orders_at(bands, onx, ony, onz, origin, ocell, p, cos_theta, g_phase, &phi);
+          if (flux.x != 0.0f || flux.y != 0.0f || flux.z != 0.0f) {
+            // The diffusive flux -D grad(phi) scattered towards the camera (its P1 part, g):
+            // the fluence's derivative along the ray from the previous sample (or a half cell
+            // ahead at the first).
+            float3 deriv;
+            if (prev_t < 0.0f) {
+              float3 ahead;
+              orders_at(bands, onx, ony, onz, origin, ocell, p + 0.5f * ocell * d, cos_theta,
+                        g_phase, &ahead);
+              deriv = (ahead - phi) / (0.5f * ocell);
+            } else {
+              deriv = (phi - prev_phi) / fmax(tm - prev_t, 1e-6f);
+            }
+            prev_phi = phi;
+            prev_t = tm;
+            ms = fmax(ms + flux.xyz * deriv, 0.0f);
+          }
+          multiple += tr * wint * ss * ms;
+        } else if (terms & 2) {
           if (tm >= next_lookup) {
             // The weight and the lookup, at the spacing of figure 9; held in between.
             float4 pl = trilinear(path, 0, nx, ny, nz, origin, voxel, p);

@@ -34,9 +34,10 @@ __kernel void downsample_tent(__global const float4* in, int nx, int ny, int nz,
   out[(k * oy + j) * ox + i] = sum;
 }
 
-// One axis (0 x, 1 y, 2 z) of the separable blur; taps[0] is the centre, radius taps.
+// One axis (0 x, 1 y, 2 z) of a separable blur with a Gaussian per channel: taps[d] holds the
+// channels' weights at distance d (taps[0] the centre), zero outside the grid.
 __kernel void blur_axis(__global const float4* in, int nx, int ny, int nz, int axis,
-                        __global const float* taps, int radius, __global float4* out) {
+                        __global const float4* taps, int radius, __global float4* out) {
   int i = get_global_id(0), j = get_global_id(1), k = get_global_id(2);
   if (i >= nx || j >= ny || k >= nz) return;
   int n = axis == 0 ? nx : (axis == 1 ? ny : nz);

@@ -38,17 +38,20 @@ SceneClass classify(const Scene& scene, Terms terms) {
   Vec3 size = b.size();
   // The mean density over a 5^3 lattice inside the bounds (blocked points left out): exact for a
   // constant field, the layers' or noise's mean for the others.
-  double density = 0;
+  double density = 0, lo = 1e300, hi = 0;
   int n = 0;
   for (int i = 0; i < 5; ++i)
     for (int j = 0; j < 5; ++j)
       for (int k = 0; k < 5; ++k) {
         Vec3 p = b.lo + size * Vec3{(i + 0.5) / 5, (j + 0.5) / 5, (k + 0.5) / 5};
         if (m.density->blocked(p)) continue;
-        density += m.density->density(p);
+        const double d = m.density->density(p);
+        density += d;
         ++n;
+        if (d > 0) lo = std::min(lo, d), hi = std::max(hi, d);
       }
   density = n ? density / n : 0;
+  c.contrast = hi > 0 ? hi / lo : 1;
   double extent =
       std::cbrt(std::max(size.x, 1e-9) * std::max(size.y, 1e-9) * std::max(size.z, 1e-9));
   c.tau = sigma_t / 3 * density * extent;

@@ -18,6 +18,9 @@ struct SceneClass {
   double tau = 1;             // optical size: mean sigma_t x mean density x the object's size
   double g = 0;
   bool light_inside = false;  // a point or spot light inside the object's bounding sphere
+  // The largest density over the smallest (> 0) on the same lattice as tau's; 1 for a constant
+  // field. Not a calibration feature: it marks what psf's multiple term cannot render.
+  double contrast = 1;
 
   // The continuous features, scaled so that one unit is about one step of the calibration grid:
   // log2(tau) / 2, -log10(1 - albedo) and g / 0.7.

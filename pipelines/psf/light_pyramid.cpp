@@ -25,8 +25,8 @@ cl::NDRange range(int nx, int ny, int nz) {
 }  // namespace
 
 cl::Program& program(gpu::ClContext& cl) {
-  return cl.program(
-      with_cl_library({"kernels/psf/light.cl", "kernels/psf/pyramid.cl", "kernels/psf/march.cl"}));
+  return cl.program(with_cl_library({"kernels/psf/light.cl", "kernels/psf/pyramid.cl",
+                                     "kernels/psf/march.cl", "kernels/psf/orders.cl"}));
 }
 
 std::vector<cl_int4> pyramid_layout(int nx, int ny, int nz) {
@@ -63,9 +63,11 @@ Pyramid build_pyramid(gpu::ClContext& cl, const cl::Buffer& level0, int nx, int 
     cl::Buffer a = float4_buffer(cl, n), b = float4_buffer(cl, n);
     gpu::set_args(down, prev, f.s[1], f.s[2], f.s[3], a, c.s[1], c.s[2], c.s[3]);
     queue.enqueueNDRangeKernel(down, cl::NullRange, range(c.s[1], c.s[2], c.s[3]));
-    std::vector<float> taps = gaussian_taps(level_sigma(static_cast<int>(k)));
+    std::vector<cl_float4> taps;  // the same Gaussian for every channel
+    for (float t : gaussian_taps(level_sigma(static_cast<int>(k))))
+      taps.push_back(cl_float4{{t, t, t, t}});
     cl::Buffer tap_buf(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                       taps.size() * sizeof(float), taps.data());
+                       taps.size() * sizeof(cl_float4), taps.data());
     for (int axis = 0; axis < 3; ++axis) {
       gpu::set_args(blur, a, c.s[1], c.s[2], c.s[3], axis, tap_buf,
                     static_cast<int>(taps.size()) - 1, b);

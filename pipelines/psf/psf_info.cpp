@@ -7,7 +7,26 @@ namespace scatter {
 const SettingsTable<PsfSettings>& psf_settings() {
   static const SettingsTable<PsfSettings> table(
       "psf",
-      {setting("step", &PsfSettings::step, 0.05, 4, frame(),
+      {setting("model", &PsfSettings::model, 0, 1, kept("lights"),
+               "the multiple term: 0 the paper's (Algorithm 2: the pyramid read at one path "
+               "length per point); 1 orders (each scattering order spread and drifted by its "
+               "flight on a coarse pyramid level, with its own phase)"),
+       setting("level", &PsfSettings::level, -1, 4, kept("lights"),
+               "model 1: the pyramid level the orders run on; -1 the coarsest whose voxel is at "
+               "most a third of the first flight's spread"),
+       one_of(setting("flights", &PsfSettings::flights, 1, 3, kept("lights"),
+                      "model 1: Gaussians per flight, 1 or 3 (3 follow the exponential flight's "
+                      "radial distribution)"),
+              {1, 3}),
+       setting("drift", &PsfSettings::drift, -1, 1, kept("lights"),
+               "model 1: the share of each flight's mean displacement along the light that is "
+               "applied; -1 the calibrated min(0.5, 2.5 (1 - g)) (docs/BENCHMARKS.md)"),
+       setting("flux", &PsfSettings::flux, 0, 2, frame(),
+               "model 1: the diffusive flux's P1 part towards the camera, 0 none, 1 with one "
+               "flight's D = 1 / (3 c), 2 with diffusion's 1 / (3 c (1 - g))"),
+       flag("tail", &PsfSettings::tail, kept("lights"),
+            "model 1: sum the orders past a steady decay as a geometric series"),
+       setting("step", &PsfSettings::step, 0.05, 4, frame(),
                "the view march's sub-step, in voxels"),
        setting("spacing", &PsfSettings::spacing, 0.1, 10, frame(),
                "pyramid lookups per projected blur width"),

@@ -157,4 +157,19 @@ Volume3 blur_gaussian(const Volume3& v, double sigma) {
   return cur;
 }
 
+OrderFlight order_flight(double g, int m) {
+  if (m < 1) throw std::invalid_argument("order_flight: m >= 1");
+  // E|R_m|^2 - E|R_(m-1)|^2 - (|mu_m|^2 - |mu_(m-1)|^2) with mu_m = sum_{k=1}^m g^k:
+  //   2 + 2 S - 2 S g^m - g^(2m), S = sum_{k=1}^{m-1} g^k.
+  double gm = std::pow(g, m), s = 0;
+  for (int k = 1; k < m; ++k) s += std::pow(g, k);
+  return {gm, (2 + 2 * s * (1 - gm) - gm * gm) / 3};
+}
+
+double walk_mean_square(double g, int m) {
+  double sum = 2.0 * m;
+  for (int k = 1; k < m; ++k) sum += 2.0 * (m - k) * std::pow(g, k);
+  return sum;
+}
+
 }  // namespace scatter::psf

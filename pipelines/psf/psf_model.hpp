@@ -66,4 +66,23 @@ Volume3 downsample_tent(const Volume3& v);
 Volume3 blur_gaussian(const Volume3& v, double sigma);
 std::vector<float> gaussian_taps(double sigma);  // taps[0] is the centre, taps[i] = taps[-i]
 
+// The `orders` model (model 1; docs/pipelines/psf.md): the light scattered m >= 1 times, order by
+// order, as a random walk whose m-th flight after the first scattering (length exponential with
+// mean 1 / c, direction HG-correlated with the previous one, the first with the light's) has
+// moved the walk, on average, by g^m / c along the light and spread it by `variance` per axis.
+// Both in mean free paths (multiply by 1 / c, squared for the variance). The variances add up to
+// the walk's exact covariance (walk_mean_square - |mean|^2), so after many flights the spread
+// grows as 2 m / (3 (1 - g)) per axis: diffusion with the reduced coefficient c (1 - g).
+struct OrderFlight {
+  double drift = 0;     // mean displacement along the light's direction
+  double variance = 0;  // per-axis variance added by this flight
+};
+OrderFlight order_flight(double g, int m);  // m >= 1
+// E|R_m|^2 of the walk after m flights, closed form (mean free paths squared):
+//   2 m + 2 sum_{k=1}^{m-1} (m - k) g^k.
+double walk_mean_square(double g, int m);
+// Henyey-Greenstein composes as HG(g1) * HG(g2) = HG(g1 g2) (Legendre coefficients g^l), so light
+// scattered m times, seen after one more scattering, has the phase HG(g^(m+1)) about the light's
+// direction when its directions forget where it is.
+
 }  // namespace scatter::psf

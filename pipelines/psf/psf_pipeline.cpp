@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numbers>
 #include <sstream>
 #include <string>
 
@@ -32,6 +33,21 @@ void PsfPipeline::prepare(const Scene& scene) {
   medium_.density = scene.medium.density;
   float max_s = 0;
   for (float v : grid.sigma_s) max_s = std::max(max_s, v);
+  // The orders' mean free path: b over the voxels holding medium (weighted by their share of
+  // it), and c from the medium's own albedo (a blocker's absorption is not the medium's).
+  std::array<double, 3> sum_s{};
+  double occupied = 0;
+  for (size_t v = 0; v < grid.count(); ++v) {
+    if (grid.sigma_s[3 * v] + grid.sigma_s[3 * v + 1] + grid.sigma_s[3 * v + 2] <= 0) continue;
+    occupied += grid.occupancy[v];
+    for (int c = 0; c < 3; ++c) sum_s[c] += grid.sigma_s[3 * v + c];
+  }
+  const Vec3 ms = scene.medium.sigma_s, ma = scene.medium.sigma_a;
+  const double mss[3] = {ms.x, ms.y, ms.z}, mas[3] = {ma.x, ma.y, ma.z};
+  for (int c = 0; c < 3; ++c)
+    medium_.mean_sigma_t[c] =
+        occupied > 0 && mss[c] > 0 ? sum_s[c] / occupied * (1 + mas[c] / mss[c]) : 0.0;
+  medium_.orders.clear();
   thickness_ = double(max_s) * grid.voxel * std::max({grid.nx, grid.ny, grid.nz});
   medium_.pms = psf::pms_table(scene.medium.g);
   medium_.pms_buf = upload(cl, medium_.pms.inv_norm);
@@ -88,6 +104,14 @@ Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, co
                       !need_pyramid ? "the multiple term is not rendered"
                       : changed     ? lights + ": Gaussian pyramid of the scattered light"
                                     : "every light's pyramid is reused (camera-only change)"});
+  const bool orders = need_pyramid && s.model == 1;
+  p.stages.push_back(
+      {"orders", orders && changed > 0,
+       !need_pyramid ? "the multiple term is not rendered"
+       : !orders     ? "model 0 (the paper's): the march reads the pyramid at one path length"
+       : changed ? lights + ": the scattering orders on a coarse pyramid level, each spread and "
+                            "drifted by its flight (model 1, orders)"
+                 : "every light's orders are reused (camera-only change)"});
   p.stages.push_back({"march_single", request.terms != Terms::Multiple,
                       request.terms == Terms::Multiple ? "single term not requested"
                                                        : "sub-steps of " + short_number(s.step) +
@@ -98,9 +122,11 @@ Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, co
   else if (thin)
     ms_reason = "optically thin (scattering thickness " + short_number(thickness) + thickness_note +
                 " < " + short_number(s.thin) + "): multiple scattering is negligible";
+  else if (s.model == 1)
+    ms_reason = "model 1 (orders): the orders' bands with their phases HG(g^(m+1)), every sub-step";
   else
-    ms_reason = "pyramid lookups at the equation-18 width, every " + short_number(s.spacing) +
-                " projected blur width; attenuation " +
+    ms_reason = "model 0 (the paper's): pyramid lookups at the equation-18 width, every " +
+                short_number(s.spacing) + " projected blur width; attenuation " +
                 (s.atten == 0   ? "over the whole path (paper)"
                  : s.atten == 1 ? "of the view segment"
                                 : "by absorption only");
@@ -160,14 +186,40 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
     }
     if (kept.count(keys[i])) continue;
     psf::LightVolume v = psf::build_light_volume(cl, m, lights, static_cast<int>(i));
+    medium_.orders.erase(keys[i]);  // built from the volume just replaced
     light_ms += v.light_ms;
     pyramid_ms += v.pyramid_ms;
     ++light_builds_;
     kept.emplace(keys[i], std::move(v));
   }
   medium_.lights = std::move(kept);
+  for (auto it = medium_.orders.begin(); it != medium_.orders.end();)
+    it = medium_.lights.count(it->first) ? std::next(it) : medium_.orders.erase(it);
   result.timings.push_back({"light_volume", light_ms});
   result.timings.push_back({"pyramid", pyramid_ms});
+  const bool thin_medium = thickness_ < s.thin;
+  double orders_ms = 0;
+  if (s.model == 1 && request.terms != Terms::Single && !thin_medium) {
+    psf::OrderParams op{.g = scene.medium.g,
+                        .mean_sigma_t = medium_.mean_sigma_t,
+                        .level = s.level,
+                        .flights = s.flights,
+                        .drift = s.drift >= 0 ? s.drift : psf::calibrated_drift(scene.medium.g),
+                        .tail = s.tail};
+    for (size_t i = 0; i < keys.size(); ++i) {
+      const psf::LightVolume& v = medium_.lights.at(keys[i]);
+      const int level = psf::orders_level(op, m.voxel, static_cast<int>(v.pyramid.layout.size()));
+      auto it = medium_.orders.find(keys[i]);
+      if (it != medium_.orders.end() && it->second.level == level &&
+          it->second.flights == s.flights && it->second.tail == s.tail &&
+          it->second.drift == op.drift)
+        continue;
+      psf::Orders o = psf::build_orders(cl, m, v.pyramid, lights, static_cast<int>(i), op);
+      orders_ms += o.ms;
+      medium_.orders.insert_or_assign(keys[i], std::move(o));
+    }
+  }
+  result.timings.push_back({"orders", orders_ms});
   clock.restart();
 
   const int w = scene.width, h = scene.height;
@@ -175,22 +227,35 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
   std::vector<float> zeros(floats, 0.f);
   cl::Buffer out(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float),
                  zeros.data());
-  const bool thin = thickness_ < s.thin;
+  const bool thin = thin_medium;
   const int terms = (request.terms != Terms::Multiple ? 1 : 0) |
                     (request.terms != Terms::Single && !thin ? 2 : 0);
   const float g = static_cast<float>(scene.medium.g);
   const float theta2 = static_cast<float>(psf::mean_square_angle(scene.medium.g));
   const float alpha = static_cast<float>(psf::curvature_alpha(scene.medium.g));
   cl::Kernel k(psf::program(cl), "psf_march");
+  // Model 1's flux term: 3 g D / (4 pi) per channel, D = 1 / (3 c) (one flight's) or, flux 2,
+  // 1 / (3 c (1 - g)) (diffusion's, with the reduced coefficient).
+  cl_float4 flux{{0, 0, 0, 0}};
+  for (int c = 0; c < 3 && s.flux > 0; ++c) {
+    const double st = medium_.mean_sigma_t[c], gg = scene.medium.g;
+    if (st <= 0) continue;
+    const double D = 1 / (3 * st * (s.flux == 2 ? 1 - gg : 1.0));
+    flux.s[c] = static_cast<float>(3 * gg * D / (4 * std::numbers::pi));
+  }
   for (size_t i = 0; i < keys.size() && terms; ++i) {
     const psf::LightVolume& v = medium_.lights.at(keys[i]);
-    gpu::set_args(
-        k, m.origin, m.voxel, m.nx, m.ny, m.nz, m.sigma_s, m.sigma_t, lights, static_cast<int>(i),
-        g, camera, w, h, static_cast<float>(s.step), terms, v.l0, v.path, v.tau, v.pyramid.data,
-        v.pyramid.levels, v.pyramid.widths, static_cast<int>(v.pyramid.layout.size()),
-        medium_.pms_buf, static_cast<int>(medium_.pms.inv_norm.size()),
-        static_cast<float>(medium_.pms.log_min), static_cast<float>(medium_.pms.log_max), theta2,
-        alpha, static_cast<float>(s.shift), s.atten, static_cast<float>(s.spacing), out);
+    const bool orders = s.model == 1 && (terms & 2);
+    const psf::Orders* o = orders ? &medium_.orders.at(keys[i]) : nullptr;
+    gpu::set_args(k, m.origin, m.voxel, m.nx, m.ny, m.nz, m.sigma_s, m.sigma_t, lights,
+                  static_cast<int>(i), g, camera, w, h, static_cast<float>(s.step), terms, v.l0,
+                  v.path, v.tau, v.pyramid.data, v.pyramid.levels, v.pyramid.widths,
+                  static_cast<int>(v.pyramid.layout.size()), medium_.pms_buf,
+                  static_cast<int>(medium_.pms.inv_norm.size()),
+                  static_cast<float>(medium_.pms.log_min), static_cast<float>(medium_.pms.log_max),
+                  theta2, alpha, static_cast<float>(s.shift), s.atten,
+                  static_cast<float>(s.spacing), orders ? 1 : 0, o ? o->bands : v.pyramid.data,
+                  o ? o->nx : 1, o ? o->ny : 1, o ? o->nz : 1, o ? o->cell : 1.f, flux, out);
     queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
     if (request.progress) {
       queue.finish();

@@ -7,10 +7,12 @@
 // light rebuilds its own only. Refraction and Fresnel are neglected (straight rays).
 //
 // Settings: the table in pipelines/psf/psf_info.cpp (`scatterd pipelines`, docs/pipelines/psf.md).
-// atten 2 (absorption only over the view segment) is the default for the measurements in
-// docs/BENCHMARKS.md (kernels/psf/march.cl).
+// model 1 (`orders`, pipelines/psf/orders.hpp) is the default; model 0 is the paper's march
+// (Algorithm 2, with atten 2, absorption only over the view segment, as its default); figures in
+// docs/BENCHMARKS.md.
 #pragma once
 
+#include <array>
 #include <map>
 #include <memory>
 
@@ -18,11 +20,18 @@
 #include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 #include "pipelines/psf/light_pyramid.hpp"
+#include "pipelines/psf/orders.hpp"
 #include "pipelines/psf/psf_model.hpp"
 
 namespace scatter {
 
 struct PsfSettings {
+  int model = 1;  // 0: the paper's (Algorithm 2); 1: orders
+  int level = -1;
+  int flights = 3;
+  bool tail = true;
+  int flux = 0;
+  double drift = -1;  // -1: psf::calibrated_drift(g)
   double step = 1;
   double spacing = 1;
   double shift = 8;
@@ -53,6 +62,8 @@ class PsfPipeline : public Pipeline {
     std::shared_ptr<const DensityField> density;  // keeps the fingerprinted address taken
     std::unique_ptr<ClMedium> cl;
     std::map<std::string, psf::LightVolume> lights;  // by the light's packed parameters
+    std::map<std::string, psf::Orders> orders;       // model 1's, by the same keys
+    std::array<double, 3> mean_sigma_t{};            // c over the medium's voxels
     psf::PmsTable pms;
     cl::Buffer pms_buf;
   };

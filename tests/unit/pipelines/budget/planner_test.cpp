@@ -160,6 +160,25 @@ TEST(Planner, KeepsThicknessAwayFromALightInside) {
   EXPECT_TRUE(said);
 }
 
+// psf's orders fly one mean free path for the whole medium: the layers' density contrast of 10
+// puts its multiple term 32 % off (docs/BENCHMARKS.md), the bunny's noise (contrast 4) 23 %.
+TEST(Planner, KeepsPsfAwayFromAStrongDensityContrast) {
+  auto psf_note = [](const Scene& s) {
+    BudgetChoice c = plan_budget(s, Terms::All, Budget{0.5}, {}, table());
+    for (const PlanOption& o : c.alternatives)
+      if (o.pipeline == "psf:normal") return o.note;
+    return std::string("(not listed)");
+  };
+  Scene layers = load_scene(test::source_path("scenes/layers.json"));
+  EXPECT_NEAR(classify(layers, Terms::All).contrast, 10, 1e-9);
+  EXPECT_NE(psf_note(layers).find("psf: a density contrast of 10"), std::string::npos)
+      << psf_note(layers);
+  Scene bunny = load_scene(test::source_path("scenes/bunny.json"));
+  EXPECT_LT(classify(bunny, Terms::All).contrast, 5);
+  EXPECT_EQ(psf_note(bunny).find("density contrast"), std::string::npos) << psf_note(bunny);
+  EXPECT_DOUBLE_EQ(classify(sphere_scene(0.9, 4, 0), Terms::All).contrast, 1);
+}
+
 // No budget asked for: 10 %, but not at any price. Where only the path tracer meets it and that
 // would take past soft_seconds, the most accurate way expected within them.
 TEST(Planner, ASoftBudgetTakesTheMostAccurateWayWithinItsTime) {
