@@ -32,6 +32,12 @@ struct RequestTooCostly : ValidationError {
   using ValidationError::ValidationError;
 };
 
+// A request the server cannot answer for a reason of its own, such as a shipped scene whose mesh
+// file is missing (503); names the field that chose it.
+struct ServerAssetMissing : ValidationError {
+  using ValidationError::ValidationError;
+};
+
 struct RenderOutcome {
   std::optional<RenderResult> result;
   int status = 200;  // else 400 (a ValidationError), 503 (cancelled, GPU unavailable), 500
