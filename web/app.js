@@ -21,6 +21,10 @@ const state = {
 // homogeneous medium) by `thickness`, its single-scattering glow, at exposure 2^1.6 (the slider's
 // start; docs/WEB.md says why not psf or lbl).
 const PREFERRED = { scene: 'jade', pipeline: 'thickness', quality: 'normal', terms: 'single' };
+// A still frame of the single term adds the multiple term from one of these (the first the
+// server has), at draft quality and half size: the first screen shows multiple scattering too,
+// while moving frames stay fast.
+const COMPOSITE = { from: ['psf', 'lbl'], quality: 'draft', scale: 0.5 };
 const BUSY_AFTER_MS = 700;  // a frame not back by then shows the busy line and its cancel button
 const registry = new Map();  // GET /api/pipelines: name -> {summary, terms, qualities, bakes, ...}
 
@@ -101,6 +105,20 @@ function pipelineChanged() {
   fillSelect($('terms'), p.terms.map((t) => ({ value: t })), p.terms.includes(terms) ? terms : p.default_terms);
   $('bake-box').hidden = !p.bakes;
   $('bake').disabled = !p.bakes || !!state.baking;
+  compositeControl();
+}
+
+// The pipeline a still frame takes the multiple term from, when the selected pipeline renders
+// only the single term (else none).
+function compositeFrom() {
+  const p = selected();
+  if (!p || p.terms.includes('multiple') || $('terms').value !== 'single') return null;
+  return COMPOSITE.from.map((n) => registry.get(n)).find((q) => q && q.terms.includes('multiple')) || null;
+}
+function compositeControl() {
+  const from = compositeFrom();
+  $('composite-box').hidden = !from;
+  $('composite-from').textContent = from ? `(${from.name})` : '';
 }
 
 // A hello: a new scene (keep_view false) or the same view by another pipeline, quality, terms,
@@ -115,6 +133,11 @@ function hello(keepView) {
   if (state.source && state.source.inline) msg.scene = state.source.json;
   else msg.scene_name = $('scene').value;
   if (state.medium && !msg.scene) msg.medium = state.medium;
+  const from = compositeFrom();
+  if (from && $('composite').checked) {
+    const q = from.qualities.find((x) => x.name === COMPOSITE.quality);
+    msg.composite = { pipeline: from.name, settings: q ? q.settings : {}, scale: COMPOSITE.scale };
+  }
   send(msg, 'h' + state.request);
 }
 
@@ -193,7 +216,8 @@ function refineText(refine, error) {
   if (refine.state === 'converged') return `${e} · converged (under ${100 * refine.floor} %)`;
   if (refine.state === 'done') return e ? `${e} · refined` : '';
   const step = refine.stage === 'reference' ? `reference pass ${refine.pass}, ${refine.spp} spp`
-    : refine.stage === 'quality' ? `quality ${refine.quality}` : 'full size';
+    : refine.stage === 'quality' ? `quality ${refine.quality}`
+    : refine.stage === 'multiple' ? `+ multiple from ${refine.pipeline}` : 'full size';
   return `${e ? e + ' · ' : ''}converging (${step})`;
 }
 function showRefine(refine, error) {
@@ -201,6 +225,7 @@ function showRefine(refine, error) {
   $('refine-next').textContent = '';
   canvas.dataset.error = error === undefined ? '' : String(error);
   canvas.dataset.refine = refine ? refine.state : '';
+  canvas.dataset.stage = refine ? refine.stage : '';
 }
 function showRefineNote(msg) {
   const r = msg.refine;
@@ -252,8 +277,13 @@ function sceneArrived(msg) {
   state.radiusRange = [reach * 1.15, reach * 15];
   state.lights = msg.lights.map((l) => ({ ...l }));
   const image = msg.source && msg.source.image;
-  canvas.width = marker.width = (image && image.width) || 512;
-  canvas.height = marker.height = (image && image.height) || 512;
+  // Setting a canvas's size clears it: only when it changes, so that the frame on show stays
+  // until the new hello's first frame comes (a long one shows the busy line over it).
+  const w = (image && image.width) || 512, h = (image && image.height) || 512;
+  if (canvas.width !== w || canvas.height !== h) {
+    canvas.width = marker.width = w;
+    canvas.height = marker.height = h;
+  }
   $('frame').style.aspectRatio = `${canvas.width} / ${canvas.height}`;
   lightControls();
   materialControls();
@@ -389,7 +419,8 @@ function frameArrived(header, bitmap) {
   if (t.length) $('rtt').textContent = (performance.now() - Math.max(...t)).toFixed(0);
   for (const k of state.sentAt.keys()) if (performance.now() - state.sentAt.get(k) > 60000) state.sentAt.delete(k);
   $('size').textContent = `${header.width}×${header.height}${header.reduced ? ' (moving)' : ''}`;
-  $('stages').textContent = `${header.pipeline}: ` + Object.entries(header.timings_ms)
+  const composite = header.refine && header.refine.stage === 'multiple' ? `${$('pipeline').value} + multiple from ` : '';
+  $('stages').textContent = `${composite}${header.pipeline}: ` + Object.entries(header.timings_ms)
     .map(([k, v]) => `${k} ${v.toFixed(1)}`).join(' · ') + ' ms';
   showRefine(header.refine, header.error_estimate);
   showPlan(header.plan);
@@ -532,7 +563,8 @@ $('upload').addEventListener('change', (e) => { if (e.target.files[0]) upload(e.
 $('scene').addEventListener('change', () => { state.source = null; state.medium = null; fillPipelines($('pipeline').value); pipelineChanged(); hello(false); });
 $('pipeline').addEventListener('change', () => { pipelineChanged(); hello(true); });
 $('quality').addEventListener('change', () => hello(true));
-$('terms').addEventListener('change', () => hello(true));
+$('terms').addEventListener('change', () => { compositeControl(); hello(true); });
+$('composite').addEventListener('change', () => hello(true));
 $('exposure').addEventListener('change', () => hello(true));
 $('bake').addEventListener('click', bake);
 $('bake-cancel').addEventListener('click', cancelBake);
