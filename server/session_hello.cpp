@@ -51,8 +51,8 @@ std::optional<Composite> read_composite(JsonObject& m, const nlohmann::json& msg
 
 }  // namespace
 
-Hello read_hello_message(const nlohmann::json& msg, const ApiOptions& options,
-                         SceneLibrary& scenes, long long& request) {
+Hello read_hello_message(const nlohmann::json& msg, const ApiOptions& options, SceneLibrary& scenes,
+                         long long& request) {
   Hello hello;
   JsonObject m(msg, "");
   m.string("type", std::nullopt);

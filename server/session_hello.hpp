@@ -21,7 +21,7 @@ struct Hello {
 
 // Throws ValidationError naming the hello's field (or std::exception for a server-side
 // problem); `request` is set as soon as it is read, so that an error can echo it.
-Hello read_hello_message(const nlohmann::json& msg, const ApiOptions& options,
-                         SceneLibrary& scenes, long long& request);
+Hello read_hello_message(const nlohmann::json& msg, const ApiOptions& options, SceneLibrary& scenes,
+                         long long& request);
 
 }  // namespace scatter::server

@@ -30,7 +30,8 @@ TEST(ReducedFrames, SizeFollowsTheBudgetThenDraftSettings) {
   r.measured("thickness", budget / 16);  // fast again: as large as allowed
   EXPECT_EQ(r.choice("thickness").scale, ReducedFrames::kMaxScale);
   EXPECT_EQ(r.choice("surface").scale, ReducedFrames::kStartScale);  // its own
-  r.measured("surface", 0);  // nothing measured: unchanged
+  // Nothing measured: unchanged.
+  r.measured("surface", 0);
   EXPECT_EQ(r.choice("surface").scale, ReducedFrames::kStartScale);
 }
 
