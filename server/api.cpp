@@ -161,7 +161,7 @@ void Api::handle(const HttpRequest& request, Respond respond) {
     route(request, *route_name, once);
   } catch (const RequestTooCostly& e) {
     once(error(413, e.what(), e.field()));
-  } catch (const ServerAssetMissing& e) {
+  } catch (const ServerUnavailable& e) {
     once(error(503, without_paths(e.what(), options_), e.field()));
   } catch (const ValidationError& e) {
     once(error(400, without_paths(e.what(), options_), e.field()));
@@ -374,16 +374,16 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
     // A shipped scene that cannot load is the server's problem (503), not the request's.
     std::vector<std::string> missing = SceneLibrary::missing_files(file);
     if (!missing.empty())
-      throw ServerAssetMissing("scene_name", "the server cannot show scene \"" + name +
-                                                 "\": the file it names, \"" + missing.front() +
-                                                 "\", is missing on the server");
+      throw ServerUnavailable("scene_name", "the server cannot show scene \"" + name +
+                                                "\": the file it names, \"" + missing.front() +
+                                                "\", is missing on the server");
     try {
       spec.scene = library.load(file, limits, &spec.scene_load_ms);
     } catch (const ValidationError&) {
       throw;
     } catch (const std::exception& e) {
-      throw ServerAssetMissing("scene_name", "the server cannot load scene \"" + name +
-                                                 "\": " + without_paths(e.what(), options));
+      throw ServerUnavailable("scene_name", "the server cannot load scene \"" + name +
+                                                "\": " + without_paths(e.what(), options));
     }
   } else {
     check_file_fields(request["scene"], "scene");

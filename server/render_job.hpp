@@ -32,9 +32,9 @@ struct RequestTooCostly : ValidationError {
   using ValidationError::ValidationError;
 };
 
-// A request the server cannot answer for a reason of its own, such as a shipped scene whose mesh
-// file is missing (503); names the field that chose it.
-struct ServerAssetMissing : ValidationError {
+// A request the server cannot answer for a reason of its own (503): a shipped scene whose mesh
+// file is missing, an assets folder it cannot write; names the field that led there.
+struct ServerUnavailable : ValidationError {
   using ValidationError::ValidationError;
 };
 

@@ -173,6 +173,20 @@ TEST_F(ApiTest, AShippedSceneWithAMissingMeshIs503NamingSceneAndFile) {
   EXPECT_EQ(r.status, 200) << r.body;
 }
 
+// An assets folder the server cannot make is its own problem: 503, naming no server path.
+TEST_F(ApiTest, UploadsTheServerCannotStoreAre503) {
+  auto dir = test::scratch_dir("api_unwritable_assets");
+  test::write_file(dir / "blocked", "a file where the folder should go");
+  ApiOptions o = options("");
+  o.assets_dir = dir / "blocked" / "assets";
+  Api api(o, queue_, metrics_);
+  HttpResponse r = api.handle({"POST", "/api/assets?kind=mesh&format=obj", "v 0 0 0\n", ""});
+  EXPECT_EQ(r.status, 503) << r.body;
+  EXPECT_EQ(json(r)["field"], "body");
+  EXPECT_NE(json(r)["error"].get<std::string>().find("cannot store"), std::string::npos) << r.body;
+  EXPECT_EQ(r.body.find(dir.string()), std::string::npos) << r.body;
+}
+
 TEST_F(ApiTest, ServesTheWebClient) {
   HttpResponse r = call("GET", "/");
   EXPECT_EQ(r.status, 200);
