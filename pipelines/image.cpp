@@ -4,12 +4,14 @@
 #include <OpenImageIO/imageio.h>
 #include <png.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
 #include <stdexcept>
+#include <tuple>
 
 namespace scatter {
 namespace {
@@ -82,7 +84,8 @@ std::string encode_png(const Image& image, const ToneMap& tone) {
 }
 
 // EXR (linear float) and JPEG (sRGB) through OpenImageIO, into memory.
-std::string encode_oiio(const Image& image, const std::string& format, const ToneMap& tone) {
+std::string encode_oiio(const Image& image, const std::string& format, const ToneMap& tone,
+                        int jpeg_quality) {
   const bool linear = format == "exr";
   std::vector<unsigned char> buffer;
   OIIO::Filesystem::IOVecOutput proxy(buffer);
@@ -92,6 +95,7 @@ std::string encode_oiio(const Image& image, const std::string& format, const Ton
     throw std::runtime_error("OpenImageIO cannot encode " + format + ": " + OIIO::geterror());
   OIIO::ImageSpec spec(image.width, image.height, 3,
                        linear ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+  if (!linear) spec.attribute("Compression", "jpeg:" + std::to_string(jpeg_quality));
   bool ok = out->open(name, spec);
   if (ok && linear) {
     ok = out->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data());
@@ -105,6 +109,32 @@ std::string encode_oiio(const Image& image, const std::string& format, const Ton
 }
 
 }  // namespace
+
+Image resample(const Image& image, int width, int height) {
+  Image out(width, height);
+  if (image.width <= 0 || image.height <= 0) return out;
+  // Pixel (x, y) of the output samples the source at its centre's position in source pixels.
+  auto axis = [](int i, int n, int source) {
+    double u = std::clamp((i + 0.5) * source / n - 0.5, 0.0, source - 1.0);
+    int i0 = std::min(static_cast<int>(u), source - 1);
+    return std::tuple{i0, std::min(i0 + 1, source - 1), u - i0};
+  };
+  for (int y = 0; y < height; ++y) {
+    auto [y0, y1, fy] = axis(y, height, image.height);
+    for (int x = 0; x < width; ++x) {
+      auto [x0, x1, fx] = axis(x, width, image.width);
+      for (int c = 0; c < 3; ++c) {
+        auto at = [&](int px, int py) {
+          return image.rgb[(size_t(py) * image.width + px) * 3 + c];
+        };
+        double top = at(x0, y0) * (1 - fx) + at(x1, y0) * fx;
+        double bottom = at(x0, y1) * (1 - fx) + at(x1, y1) * fx;
+        out.rgb[(size_t(y) * width + x) * 3 + c] = static_cast<float>(top * (1 - fy) + bottom * fy);
+      }
+    }
+  }
+  return out;
+}
 
 std::vector<unsigned char> to_srgb8(const Image& image, const ToneMap& tone) {
   const auto& steps = srgb_steps();
@@ -137,10 +167,14 @@ void check_image_path(const std::filesystem::path& path) {
                              ": unknown image type (use .exr, .png or .jpg)");
 }
 
-std::string encode_image(const Image& image, const std::string& format, const ToneMap& tone) {
+std::string encode_image(const Image& image, const std::string& format, const ToneMap& tone,
+                         int jpeg_quality) {
+  if (jpeg_quality < 1 || jpeg_quality > 100)
+    throw std::invalid_argument("JPEG quality " + std::to_string(jpeg_quality) +
+                                " is outside 1-100");
   if (format == "png") return encode_png(image, tone);
   if (format == "exr" || format == "jpg" || format == "jpeg")
-    return encode_oiio(image, format, tone);
+    return encode_oiio(image, format, tone, jpeg_quality);
   throw std::runtime_error("unknown image format \"" + format + "\" (use exr, png or jpg)");
 }
 

@@ -26,12 +26,22 @@ struct ToneMap {
   double exposure = 1.0;  // radiance is multiplied by this, clamped to [0, 1], then sRGB encoded
 };
 
+// `image` resampled to width x height, bilinear between pixel centres (edges clamped): for a
+// smooth term rendered at a fraction of the size.
+Image resample(const Image& image, int width, int height);
+
 // Encodes linear radiance as 8-bit sRGB, 3 bytes per pixel.
 std::vector<unsigned char> to_srgb8(const Image& image, const ToneMap& tone = {});
 // Throws std::runtime_error unless `path` has an extension write_image() knows.
 void check_image_path(const std::filesystem::path& path);
-// Encodes into memory: "exr" (linear float), "png" (libpng), "jpg" (OpenImageIO).
-std::string encode_image(const Image& image, const std::string& format, const ToneMap& tone = {});
+// JPEG quality on libjpeg's 1-100 scale where none is asked for: a still frame's (trame's choice
+// for a still view; a live session's frames while the user drags take kMovingJpegQuality).
+constexpr int kJpegQuality = 90, kMovingJpegQuality = 50;
+// Encodes into memory: "exr" (linear float), "png" (libpng), "jpg" (OpenImageIO, at
+// `jpeg_quality`, 1-100; the other formats ignore it). Throws std::invalid_argument for a
+// quality outside 1-100.
+std::string encode_image(const Image& image, const std::string& format, const ToneMap& tone = {},
+                         int jpeg_quality = kJpegQuality);
 // Writes by extension: .exr (linear float), .png (libpng), .jpg/.jpeg (OpenImageIO).
 // Throws std::runtime_error naming the file on failure or an unknown extension.
 void write_image(const Image& image, const std::filesystem::path& path, const ToneMap& tone = {});

@@ -93,6 +93,32 @@ std::string without_paths(std::string m, const ApiOptions& o) {
   return m;
 }
 
+// The browser client's file for a GET path ("/" is index.html): web/ files compiled into the
+// binary, looked up by name (never on disk), of the kinds a page loads; null for anything else.
+struct WebFile {
+  std::string_view body;
+  const char* type;
+};
+std::optional<WebFile> web_file(const std::string& path) {
+  static const std::map<std::string, const char*> kTypes = {
+      {".html", "text/html; charset=utf-8"},
+      {".js", "text/javascript; charset=utf-8"},
+      {".css", "text/css; charset=utf-8"}};
+  std::string rel = path == "/" ? "index.html" : path.substr(1);
+  if (path.empty() || path[0] != '/' || rel.empty() || rel.size() > 200 ||
+      rel.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_./") !=
+          std::string::npos ||
+      rel.find("..") != std::string::npos || rel.find("//") != std::string::npos || rel[0] == '.')
+    return std::nullopt;
+  auto dot = rel.rfind('.');
+  auto type = kTypes.find(dot == std::string::npos ? "" : rel.substr(dot));
+  if (type == kTypes.end()) return std::nullopt;
+  const auto& files = gpu::embedded_sources();
+  auto f = files.find("web/" + rel);
+  if (f == files.end()) return std::nullopt;
+  return WebFile{f->second, type->second};
+}
+
 std::string busy_message(const RenderQueue& q) {
   return "the render queue is full (" + std::to_string(q.max_depth()) +
          " jobs waiting); try again shortly";
@@ -135,6 +161,8 @@ void Api::handle(const HttpRequest& request, Respond respond) {
     route(request, *route_name, once);
   } catch (const RequestTooCostly& e) {
     once(error(413, e.what(), e.field()));
+  } catch (const ServerUnavailable& e) {
+    once(error(503, without_paths(e.what(), options_), e.field()));
   } catch (const ValidationError& e) {
     once(error(400, without_paths(e.what(), options_), e.field()));
   } catch (const gpu::GpuError& e) {
@@ -160,7 +188,7 @@ bool Api::quick(const HttpRequest& request) {
   if (request.method == "GET")
     return path == "/api/health" || path == "/api/pipelines" || path == "/metrics" ||
            path == "/api/assets" || path == "/api/bakes" || path.rfind("/api/bakes/", 0) == 0 ||
-           path == "/" || path == "/index.html" || path == "/app.js" || path == "/style.css";
+           web_file(path).has_value();
   return request.method == "DELETE" && path.rfind("/api/bakes/", 0) == 0;
 }
 
@@ -196,14 +224,9 @@ void Api::route(const HttpRequest& request, std::string& route_name, const Respo
     return respond(metrics_text());
   }
   // The browser client (web/), compiled into the binary.
-  static const std::map<std::string, std::pair<std::string, std::string>> kStatic = {
-      {"/", {"web/index.html", "text/html; charset=utf-8"}},
-      {"/index.html", {"web/index.html", "text/html; charset=utf-8"}},
-      {"/app.js", {"web/app.js", "text/javascript; charset=utf-8"}},
-      {"/style.css", {"web/style.css", "text/css; charset=utf-8"}}};
-  if (auto s = kStatic.find(path); s != kStatic.end() && request.method == "GET") {
+  if (auto f = web_file(path); f && request.method == "GET") {
     route_name = "static";
-    return respond({200, s->second.second, std::string(gpu::embedded_source(s->second.first)), {}});
+    return respond({200, f->type, std::string(f->body), {}});
   }
   route_name = "not_found";
   respond(error(404, "no such resource: " + path));
@@ -348,13 +371,19 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
     auto file = options.scenes_dir / (name + ".json");
     if (!std::filesystem::exists(file))
       throw ValidationError("scene_name", "no scene named \"" + name + "\"");
+    // A shipped scene that cannot load is the server's problem (503), not the request's.
+    std::vector<std::string> missing = SceneLibrary::missing_files(file);
+    if (!missing.empty())
+      throw ServerUnavailable("scene_name", "the server cannot show scene \"" + name +
+                                                "\": the file it names, \"" + missing.front() +
+                                                "\", is missing on the server");
     try {
       spec.scene = library.load(file, limits, &spec.scene_load_ms);
     } catch (const ValidationError&) {
       throw;
-    } catch (const std::exception& e) {  // a shipped scene that cannot load: the server's problem
-      throw std::runtime_error("scene " + name +
-                               " cannot be loaded: " + without_paths(e.what(), options));
+    } catch (const std::exception& e) {
+      throw ServerUnavailable("scene_name", "the server cannot load scene \"" + name +
+                                                "\": " + without_paths(e.what(), options));
     }
   } else {
     check_file_fields(request["scene"], "scene");

@@ -21,7 +21,8 @@
 //   DELETE /api/bakes/{id}  cancels a queued or running job (202); 409 once it has finished
 //   GET  /metrics        Prometheus text
 //
-// Errors are JSON {"error": "...", "field": "..."} with 400, 401, 404, 405, 409, 413 or 503.
+// Errors are JSON {"error": "...", "field": "..."} with 400, 401, 404, 405, 409, 413 or 503 (a
+// server-side problem: no GPU, a shipped scene whose files are missing, a full queue).
 #pragma once
 
 #include <atomic>

@@ -97,7 +97,15 @@ HttpResponse Api::assets(const HttpRequest& request) {
   std::string kind = q.count("kind") ? q["kind"] : "mesh";
   if (kind != "mesh" && kind != "grid") throw ValidationError("kind", "must be mesh or grid");
   if (request.body.empty()) throw ValidationError("body", "is empty: send the file's bytes");
-  std::filesystem::create_directories(dir);
+  // The folder and the files written into it are the server's: failing them is not the request's
+  // fault (503), and the message names no server path.
+  std::error_code made;
+  std::filesystem::create_directories(dir, made);
+  if (made || !std::filesystem::is_directory(dir))
+    throw ServerUnavailable("body",
+                            "the server cannot store uploads: its assets folder cannot be "
+                            "created (" +
+                                made.message() + ")");
   // Written under a temporary name, checked, then renamed: a bad upload leaves nothing behind.
   static std::atomic<unsigned> serial{0};
   std::string tmp = ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(serial++);
@@ -111,7 +119,10 @@ HttpResponse Api::assets(const HttpRequest& request) {
   auto write = [&](const std::filesystem::path& p, const std::string& bytes) {
     std::ofstream out(p, std::ios::binary);
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    if (!out) throw std::runtime_error("cannot write " + p.string());
+    if (!out)
+      throw ServerUnavailable("body",
+                              "the server cannot store the upload (its assets "
+                              "folder is not writable or is full)");
   };
   nlohmann::json info;
   if (kind == "mesh") {

@@ -5,6 +5,7 @@
 
 #include "core/errors.hpp"
 #include "pipelines/cost.hpp"
+#include "pipelines/image.hpp"
 #include "pipelines/metrics.hpp"
 #include "pipelines/reference/reference_pipeline.hpp"
 
@@ -93,6 +94,17 @@ Refinement::Refinement(const Scene& scene, const std::string& pipeline, const st
                                       : info.terms.front();
   const std::string term_name = to_string(terms_);
   steps_.push_back({RefineStep::Stage::Full, pipeline, term_name, settings});
+  if (const auto& c = options_.composite) {
+    Scene small = scene_;  // the multiple term at the composite's size
+    small.width = std::max(1, static_cast<int>(std::lround(scene_.width * c->scale)));
+    small.height = std::max(1, static_cast<int>(std::lround(scene_.height * c->scale)));
+    if (affordable(c->pipeline, small, Terms::Multiple, c->settings, options_)) {
+      RefineStep m{RefineStep::Stage::Multiple, c->pipeline, to_string(Terms::Multiple),
+                   c->settings};
+      m.scale = c->scale;
+      steps_.push_back(std::move(m));
+    }
+  }
   // The reference's own Monte Carlo frames gain nothing from its presets (they set the marcher's
   // step); its marcher is exact up to its step: no passes follow it.
   const bool own = pipeline == "reference";
@@ -102,6 +114,12 @@ Refinement::Refinement(const Scene& scene, const std::string& pipeline, const st
       if (affordable(pipeline, scene_, terms_, s, options_))
         steps_.push_back({RefineStep::Stage::Quality, pipeline, term_name, s, name});
   if (terms_ == Terms::Surface || own_marches || options_.max_passes <= 0) return;
+  // The reference of what the frames show: a composite's single plus multiple term is all (the
+  // surface term of an index-matched medium is none).
+  if (steps_.size() > 1 && steps_[1].stage == RefineStep::Stage::Multiple) {
+    if (terms_ != Terms::Single) return;
+    terms_ = Terms::All;
+  }
   pass_settings_ = own ? settings : Settings{};
   if (terms_ == Terms::Single) pass_settings_["mc"] = 1;
   seed_ = own ? static_cast<int>(ReferenceSettings::read(settings).seed) : 1;
@@ -149,6 +167,7 @@ Refinement::Outcome Refinement::take(const RefineStep& step, RenderResult& resul
     spp_ = next_pass_spp(step.spp, trace, other, options_.pass_seconds);
   } else {
     ++taken_;
+    add_multiple(step, result);
   }
   o.estimate = result.error_estimate;
   if (o.estimate && *o.estimate <= options_.floor) {
@@ -168,8 +187,23 @@ Refinement::Outcome Refinement::take(const RefineStep& step, RenderResult& resul
   return o;
 }
 
+void Refinement::add_multiple(const RefineStep& step, RenderResult& result) {
+  if (!options_.composite) return;
+  if (step.stage == RefineStep::Stage::Full) {
+    full_ = result.image;
+    return;
+  }
+  if (step.stage == RefineStep::Stage::Multiple) {
+    multiple_ = resample(result.image, full_.width, full_.height);
+    result.image = full_;
+    result.error_estimate.reset();  // the multiple term's own is not the composite's
+  }
+  if (!multiple_ || result.image.rgb.size() != multiple_->rgb.size()) return;
+  for (size_t k = 0; k < result.image.rgb.size(); ++k) result.image.rgb[k] += multiple_->rgb[k];
+}
+
 nlohmann::json Refinement::describe(const RefineStep& step, State state) const {
-  static const char* stages[] = {"full", "quality", "reference"};
+  static const char* stages[] = {"full", "quality", "reference", "multiple"};
   nlohmann::json j = {{"stage", stages[static_cast<int>(step.stage)]},
                       {"state", to_string(state)},
                       {"floor", options_.floor}};
@@ -177,6 +211,10 @@ nlohmann::json Refinement::describe(const RefineStep& step, State state) const {
   if (step.stage == RefineStep::Stage::Reference) {
     j["pass"] = step.pass;
     j["spp"] = passes_.samples();
+  }
+  if (step.stage == RefineStep::Stage::Multiple) {
+    j["pipeline"] = step.pipeline;
+    j["scale"] = step.scale;
   }
   return j;
 }

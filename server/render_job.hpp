@@ -32,6 +32,12 @@ struct RequestTooCostly : ValidationError {
   using ValidationError::ValidationError;
 };
 
+// A request the server cannot answer for a reason of its own (503): a shipped scene whose mesh
+// file is missing, an assets folder it cannot write; names the field that led there.
+struct ServerUnavailable : ValidationError {
+  using ValidationError::ValidationError;
+};
+
 struct RenderOutcome {
   std::optional<RenderResult> result;
   int status = 200;  // else 400 (a ValidationError), 503 (cancelled, GPU unavailable), 500

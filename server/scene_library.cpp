@@ -9,21 +9,34 @@
 namespace scatter::server {
 namespace {
 
-// The files a scene's JSON names ("file" fields: meshes, grids), relative to `base`.
-void named_files(const nlohmann::json& j, const std::filesystem::path& base, int depth,
-                 std::vector<std::filesystem::path>& out) {
+// The files a scene's JSON names ("file" fields: meshes, grids), as written.
+void named_files(const nlohmann::json& j, int depth, std::vector<std::string>& out) {
   if (depth > kMaxJsonDepth) return;
   if (j.is_object()) {
     for (const auto& [key, value] : j.items()) {
-      if (key == "file" && value.is_string()) {
-        std::filesystem::path f = value.get<std::string>();
-        out.push_back(f.is_absolute() ? f : base / f);
-      }
-      named_files(value, base, depth + 1, out);
+      if (key == "file" && value.is_string()) out.push_back(value.get<std::string>());
+      named_files(value, depth + 1, out);
     }
   } else if (j.is_array()) {
-    for (const auto& v : j) named_files(v, base, depth + 1, out);
+    for (const auto& v : j) named_files(v, depth + 1, out);
   }
+}
+
+// The same, relative to `base`.
+void named_files(const nlohmann::json& j, const std::filesystem::path& base,
+                 std::vector<std::filesystem::path>& out) {
+  std::vector<std::string> names;
+  named_files(j, 0, names);
+  for (const std::string& name : names) {
+    std::filesystem::path f = name;
+    out.push_back(f.is_absolute() ? f : base / f);
+  }
+}
+
+nlohmann::json read_json_file(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  return nlohmann::json::parse(text, nullptr, false);
 }
 
 size_t bytes_of(const Scene& s) {
@@ -89,12 +102,8 @@ std::shared_ptr<const Scene> SceneLibrary::get(const std::string& key,
 std::shared_ptr<const Scene> SceneLibrary::load(const std::filesystem::path& file,
                                                 const SceneLimits& limits, double* load_ms) {
   std::vector<std::filesystem::path> files{file};
-  {
-    std::ifstream in(file);
-    std::string text((std::istreambuf_iterator<char>(in)), {});
-    nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
-    if (!j.is_discarded()) named_files(j, file.parent_path(), 0, files);
-  }
+  if (nlohmann::json j = read_json_file(file); !j.is_discarded())
+    named_files(j, file.parent_path(), files);
   return get("file:" + limits_key(limits) + ":" + file.string(), std::move(files), load_ms,
              [&] { return load_scene(file, limits); });
 }
@@ -103,10 +112,23 @@ std::shared_ptr<const Scene> SceneLibrary::parse(const nlohmann::json& scene,
                                                  const std::filesystem::path& base_dir,
                                                  const SceneLimits& limits, double* load_ms) {
   std::vector<std::filesystem::path> files;
-  named_files(scene, base_dir, 0, files);
+  named_files(scene, base_dir, files);
   return get(
       "json:" + sha256_hex(limits_key(limits) + ":" + base_dir.string() + ":" + scene.dump()),
       std::move(files), load_ms, [&] { return parse_scene(scene, base_dir, limits); });
+}
+
+std::vector<std::string> SceneLibrary::missing_files(const std::filesystem::path& file) {
+  nlohmann::json j = read_json_file(file);
+  std::vector<std::string> names, missing;
+  if (!j.is_discarded()) named_files(j, 0, names);
+  for (const std::string& name : names) {
+    std::filesystem::path f = name;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(f.is_absolute() ? f : file.parent_path() / f, ec))
+      missing.push_back(name);
+  }
+  return missing;
 }
 
 SceneLibrary::Stats SceneLibrary::stats() const {

@@ -29,6 +29,10 @@ class SceneLibrary {
                                      const std::filesystem::path& base_dir,
                                      const SceneLimits& limits, double* load_ms = nullptr);
 
+  // The "file" fields of the scene in `file` (meshes, grids) whose files do not exist, as the
+  // scene writes them (relative to its folder, or absolute).
+  static std::vector<std::string> missing_files(const std::filesystem::path& file);
+
   struct Stats {
     size_t scenes = 0, bytes = 0;
     uint64_t hits = 0, loads = 0;

@@ -10,22 +10,6 @@
 #include "protocol/session_messages.hpp"
 
 namespace scatter::server {
-namespace {
-
-// `s` with the pipeline's draft quality's settings that shape only the frame (none that would
-// make another bake product or reset a kept state): cheaper frames while the user drags.
-Settings with_draft(const std::string& pipeline, Settings s) {
-  const PipelineInfo& info = pipeline_info(pipeline);
-  for (const Quality& q : info.qualities) {
-    if (q.name != "draft") continue;
-    for (const auto& [key, value] : q.settings)
-      for (const SettingInfo& setting : info.settings)
-        if (setting.key == key && setting.shapes.what == Shapes::What::Frame) s[key] = value;
-  }
-  return s;
-}
-
-}  // namespace
 
 namespace beast = boost::beast;
 namespace websocket = beast::websocket;
@@ -140,56 +124,24 @@ void WsSession::dispatch(std::string text) {
 void WsSession::read_hello(nlohmann::json msg) {
   hello_pending_ = true;
   boost::asio::post(workers_, [self = shared_from_this(), msg = std::move(msg)] {
-    std::optional<Api::RenderSpec> spec;
+    std::optional<Hello> hello;
     std::string error, field;
-    bool keep_view = false;
     long long request = 0;
-    nlohmann::json said;
     try {
-      JsonObject m(msg, "");
-      m.string("type", std::nullopt);
-      keep_view = m.boolean("keep_view", false);
-      request = m.integer("request", 0, {0, 2e9});
-      std::optional<JsonObject> medium = m.optional_object("medium");
-      spec = Api::read_render_spec(m, msg, self->options_, self->api_.scenes());
-      m.finish();
-      said = scene_message(msg, *spec->scene, self->options_.scenes_dir, request);
-      if (medium) {
-        // A shipped scene in another medium: its file's JSON (which may name meshes anywhere
-        // the server's own scenes do) with the client's medium, validated as any scene.
-        if (!said["source"].is_object())
-          throw ValidationError("medium", "needs a scene_name whose file is in --scenes-dir");
-        said["source"]["medium"] = msg["medium"];
-        SceneLimits limits;
-        limits.max_image = self->options_.max_image;
-        try {
-          spec->scene = std::make_shared<const Scene>(
-              parse_scene(said["source"], self->options_.scenes_dir, limits));
-        } catch (const ValidationError& e) {  // "scene.medium.g" is the hello's "medium.g"
-          std::string f = e.field();
-          std::string message = std::string(e.what()).substr(f.empty() ? 0 : f.size() + 2);
-          if (f.rfind("scene.", 0) == 0) f = f.substr(6);
-          throw ValidationError(f, message);
-        }
-      }
-      Api::check_cost(self->options_, spec->pipeline, *spec->scene, spec->terms, spec->settings,
-                      false, spec->max_error);
+      hello = read_hello_message(msg, self->options_, self->api_.scenes(), request);
     } catch (const ValidationError& e) {
-      spec.reset();
       error = e.what();
       field = e.field();
     } catch (const std::exception& e) {
-      spec.reset();
       error = e.what();
     }
     boost::asio::post(self->ws_.get_executor(),
-                      [self, spec = std::move(spec), error, field, keep_view, request,
-                       said = std::move(said)]() mutable {
+                      [self, hello = std::move(hello), error, field, request]() mutable {
                         self->hello_pending_ = false;
                         if (self->closed_) return;
-                        if (spec) {
+                        if (hello) {
                           self->request_ = request;
-                          self->apply_hello(std::move(*spec), keep_view, std::move(said));
+                          self->apply_hello(std::move(*hello));
                         } else {
                           nlohmann::json e = {{"type", "error"}, {"error", error}};
                           if (!field.empty()) e["field"] = field;
@@ -205,10 +157,12 @@ void WsSession::read_hello(nlohmann::json msg) {
   });
 }
 
-void WsSession::apply_hello(Api::RenderSpec spec, bool keep_view, nlohmann::json said) {
+void WsSession::apply_hello(Hello hello) {
+  Api::RenderSpec& spec = hello.spec;
+  nlohmann::json& said = hello.scene_message;
   // keep_view: the pose and lights the user steered to stay (a change of pipeline or quality);
   // only possible once a scene was shown.
-  bool keep = keep_view && scene_;
+  bool keep = hello.keep_view && scene_;
   scene_ = spec.scene;
   scene_load_ms_ = spec.scene_load_ms;
   if (!keep) {
@@ -229,6 +183,7 @@ void WsSession::apply_hello(Api::RenderSpec spec, bool keep_view, nlohmann::json
   settings_ = spec.settings;
   max_error_ = spec.max_error;
   refine_floor_ = spec.refine_floor;
+  composite_ = std::move(hello.composite);
   cancel_unsent("a new hello");  // it renders what the session no longer shows
   dirty_ = true;
   interactive_ = false;
@@ -365,7 +320,8 @@ void WsSession::maybe_render() {
                     .pass_seconds = options_.refine_pass_s,
                     .max_render_s = options_.max_render_s,
                     .max_request_mb = options_.max_request_mb,
-                    .step_max_s = 10 * options_.refine_pass_s};
+                    .step_max_s = 10 * options_.refine_pass_s,
+                    .composite = composite_};
     try {
       refine_ = Refinement(view, pipeline_, terms_, settings_, o);
     } catch (const std::exception& e) {  // validated by the hello: not expected
@@ -387,16 +343,15 @@ void WsSession::start_frame(std::optional<RefineStep> step) {
   f.camera = camera_;
   f.lights = lights_;
   bool reduced = !step;
-  if (reduced) {  // cheaper while the user interacts
-    const Reduced& c = reduced_[pipeline_];
-    f.width = std::max(1, static_cast<int>(std::lround(scene_->width * c.scale)));
-    f.height = std::max(1, static_cast<int>(std::lround(scene_->height * c.scale)));
+  // Cheaper while the user interacts; a composite's multiple term is rendered smaller too.
+  if (double scale = reduced ? reduced_.choice(pipeline_).scale : step->scale; scale != 1) {
+    f.width = std::max(1, static_cast<int>(std::lround(scene_->width * scale)));
+    f.height = std::max(1, static_cast<int>(std::lround(scene_->height * scale)));
   }
   if (!step || step->stage == RefineStep::Stage::Full) {  // the session's own frames
     f.pipeline = pipeline_;
     f.terms = terms_;
-    f.settings =
-        reduced && reduced_[pipeline_].draft ? with_draft(pipeline_, settings_) : settings_;
+    f.settings = reduced ? reduced_.settings(pipeline_, settings_) : settings_;
     f.max_error = max_error_;
   } else {
     f.pipeline = step->pipeline;
@@ -429,23 +384,14 @@ void WsSession::start_frame(std::optional<RefineStep> step) {
     on_rendered(frame, reduced, RenderOutcome{std::nullopt, 503, "the server is stopping", "", 0});
 }
 
-// Steers the next reduced frames of the session's pipeline towards kFrameBudgetMs: the side
-// scale follows sqrt(budget / measured) (pixels cost about linearly), between 1/4 and 1/2; at 1/4
-// and still over budget, the draft frame settings too.
-void WsSession::measure_reduced(const RenderResult& r) {
-  double ms = 0;
-  for (const auto& t : r.timings)
-    if (t.stage != "scene_load") ms += t.ms;
-  if (ms <= 0) return;
-  Reduced& c = reduced_[pipeline_];
-  double wanted = c.scale * std::sqrt(kFrameBudgetMs / ms);
-  if (wanted < 0.25 && !c.draft) c.draft = true;
-  c.scale = std::clamp(wanted, 0.25, 0.5);
-}
-
 void WsSession::on_rendered(long long frame, bool reduced, RenderOutcome o) {
   if (closed_ || frame != in_flight_) return;  // the client left or moved meanwhile: not sent
-  if (reduced && o.result && !frame_step_) measure_reduced(*o.result);
+  if (reduced && o.result && !frame_step_) {   // the render's own time, not the scene's load
+    double ms = 0;
+    for (const auto& t : o.result->timings)
+      if (t.stage != "scene_load") ms += t.ms;
+    reduced_.measured(pipeline_, ms);
+  }
   if (!o.result) {
     in_flight_ = 0;  // no frame to ack
     if (frame_step_) refine_.stop();
@@ -500,8 +446,11 @@ void WsSession::send_frame(long long frame, bool reduced, RenderOutcome o, nlohm
                 {"reduced", reduced},
                 {"request", request}};
       if (r.error_estimate) header["error_estimate"] = *r.error_estimate;
+      // Frames while the user drags are seen for a moment: fewer bytes (as trame does).
+      const int quality = reduced ? kMovingJpegQuality : kJpegQuality;
+      if (format == "jpg") header["jpeg_quality"] = quality;
       header.update(extra);
-      bytes = encode_image(r.image, format, ToneMap{exposure});
+      bytes = encode_image(r.image, format, ToneMap{exposure}, quality);
     } catch (const std::exception& e) {
       header = {{"type", "error"}, {"error", e.what()}, {"frame", frame}};
     }

@@ -5,7 +5,10 @@
 //    "terms": "...", "format": "jpg" | "png", "settings": {...},
 //    "quality": {"max_error": E, "refine_floor": F}, "exposure": X,
 //    "request": n, "keep_view": true,     keep_view: the session's camera and lights stay
-//    "medium": {...}}                     with scene_name: that scene in another medium
+//    "medium": {...},                     with scene_name: that scene in another medium
+//    "composite": {"pipeline": "psf", "settings": {...}, "scale": 0.5}}
+//                                         a still view of the single term adds the multiple
+//                                         term from that pipeline (server/refine.hpp)
 //
 // After a hello with a "request" (> 0) is applied the server says {"type": "scene", "request",
 // "scene_name", "source" (the scene's JSON, for a client to edit), "camera", "lights", "bounds":
@@ -22,10 +25,9 @@
 // newest state when it starts, so stale poses are never rendered. At most one frame is in flight:
 // from the moment it is queued until the client acks it, and an ack counts only for that frame.
 // While poses keep coming frames are rendered reduced, at a scale chosen per pipeline from its
-// measured reduced-frame times against kFrameBudgetMs (between 1/4 and 1/2 of each side, then the
-// pipeline's draft frame settings where 1/4 is still over budget); after
-// ~200 ms without a change (and after a hello) the still view is refined (server/refine.hpp): the
-// full-size frame (header "reduced": false), the pipeline's higher qualities, then accumulated
+// measured reduced-frame times against ReducedFrames::kFrameBudgetMs (server/reduced_frames.hpp);
+// after ~200 ms without a change (and after a hello) the still view is refined (server/refine.hpp):
+// the full-size frame (header "reduced": false), the pipeline's higher qualities, then accumulated
 // reference passes, each refined frame's header with "error_estimate" and "refine": {"stage",
 // "state", ...}, sent only when its estimate dropped by a tenth, until it is under refine_floor or
 // the passes run out. A refinement step whose result is not sent frees the slot at once (nothing to
@@ -51,7 +53,9 @@
 
 #include "scene/scene.hpp"
 #include "server/api.hpp"
+#include "server/reduced_frames.hpp"
 #include "server/refine.hpp"
+#include "server/session_hello.hpp"
 
 namespace scatter::server {
 
@@ -59,8 +63,6 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
   static constexpr size_t kMaxQueuedWrites = 32;
   static constexpr size_t kMaxBacklog = 64;  // messages held while a hello's scene loads
-  // What a reduced frame (while the user drags) aims to take, render only, in milliseconds.
-  static constexpr double kFrameBudgetMs = 80;
 
   // Holds one of the Api's session slots (taken by the caller) and gives it back when it ends.
   WsSession(boost::asio::ip::tcp::socket&& socket, Api& api, boost::asio::thread_pool& workers);
@@ -73,7 +75,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void dispatch(std::string text);
   void handle(const std::string& text);
   void read_hello(nlohmann::json msg);
-  void apply_hello(Api::RenderSpec spec, bool keep_view, nlohmann::json scene_message);
+  void apply_hello(Hello hello);
   void maybe_render();
   void start_frame(std::optional<RefineStep> step);
   void on_rendered(long long frame, bool reduced, RenderOutcome outcome);
@@ -105,8 +107,9 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   bool snapshot_ = false;             // the next still frame goes out as EXR ("snapshot")
   std::string frame_format_ = "jpg";  // the frame in flight's
   Settings settings_;
-  std::optional<double> max_error_;  // the hello's quality.max_error, for the session's frames
-  double refine_floor_ = 0.01;       // the hello's quality.refine_floor
+  std::optional<double> max_error_;     // the hello's quality.max_error, for the session's frames
+  std::optional<Composite> composite_;  // the hello's: the multiple term still frames add
+  double refine_floor_ = 0.01;          // the hello's quality.refine_floor
   long long camera_revision_ = 0, light_revision_ = 0;
   bool dirty_ = false, closed_ = false;
   // The frame in flight: queued, rendering, or sent and not yet acked (0: none).
@@ -124,14 +127,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   long long next_frame_ = 1;
   long long request_ = 0;  // the applied hello's "request", echoed in frame headers
   double exposure_ = 1.0;
-  // Reduced frames, per pipeline: the scale of each side, and whether the pipeline's draft
-  // quality (its settings that shape only the frame) is used, steered by measured frame times.
-  struct Reduced {
-    double scale = 0.5;
-    bool draft = false;
-  };
-  std::map<std::string, Reduced> reduced_;
-  void measure_reduced(const RenderResult& r);
+  ReducedFrames reduced_;  // the reduced frames' size and settings, per pipeline
   bool hello_pending_ = false;
   bool holds_slot_ = true;  // the Api's session slot, given back once (at end() or destruction)
   std::deque<std::string> backlog_;

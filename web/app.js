@@ -3,6 +3,8 @@
 // Every pipeline, quality, terms and setting name it shows comes from GET /api/pipelines; the scene
 // it shows (its JSON, camera, lights, bounds) and the scenes on offer come from the session's
 // {"type": "scene"} message, so material edits and light edits start from what is on screen.
+// The page's other scripts: panels.js (the side panel, loaded first) and input.js (orbit, zoom,
+// drop; loaded last).
 'use strict';
 
 const $ = (id) => document.getElementById(id);
@@ -21,6 +23,10 @@ const state = {
 // homogeneous medium) by `thickness`, its single-scattering glow, at exposure 2^1.6 (the slider's
 // start; docs/WEB.md says why not psf or lbl).
 const PREFERRED = { scene: 'jade', pipeline: 'thickness', quality: 'normal', terms: 'single' };
+// A still frame of the single term adds the multiple term from one of these (the first the
+// server has), at draft quality and half size: the first screen shows multiple scattering too,
+// while moving frames stay fast.
+const COMPOSITE = { from: ['psf', 'lbl'], quality: 'draft', scale: 0.5 };
 const BUSY_AFTER_MS = 700;  // a frame not back by then shows the busy line and its cancel button
 const registry = new Map();  // GET /api/pipelines: name -> {summary, terms, qualities, bakes, ...}
 
@@ -101,6 +107,20 @@ function pipelineChanged() {
   fillSelect($('terms'), p.terms.map((t) => ({ value: t })), p.terms.includes(terms) ? terms : p.default_terms);
   $('bake-box').hidden = !p.bakes;
   $('bake').disabled = !p.bakes || !!state.baking;
+  compositeControl();
+}
+
+// The pipeline a still frame takes the multiple term from, when the selected pipeline renders
+// only the single term (else none).
+function compositeFrom() {
+  const p = selected();
+  if (!p || p.terms.includes('multiple') || $('terms').value !== 'single') return null;
+  return COMPOSITE.from.map((n) => registry.get(n)).find((q) => q && q.terms.includes('multiple')) || null;
+}
+function compositeControl() {
+  const from = compositeFrom();
+  $('composite-box').hidden = !from;
+  $('composite-from').textContent = from ? `(${from.name})` : '';
 }
 
 // A hello: a new scene (keep_view false) or the same view by another pipeline, quality, terms,
@@ -115,6 +135,11 @@ function hello(keepView) {
   if (state.source && state.source.inline) msg.scene = state.source.json;
   else msg.scene_name = $('scene').value;
   if (state.medium && !msg.scene) msg.medium = state.medium;
+  const from = compositeFrom();
+  if (from && $('composite').checked) {
+    const q = from.qualities.find((x) => x.name === COMPOSITE.quality);
+    msg.composite = { pipeline: from.name, settings: q ? q.settings : {}, scale: COMPOSITE.scale };
+  }
   send(msg, 'h' + state.request);
 }
 
@@ -139,89 +164,6 @@ function showError(text) {
   $('error').hidden = false;
 }
 function clearError() { $('error').hidden = true; }
-
-// Starts (or finds) the bake job for this scene and quality, follows it, and can cancel it.
-async function bake() {
-  const pipeline = selected();
-  if (!pipeline || !pipeline.bakes) return;
-  const bar = $('bake-progress'), label = $('bake-status');
-  state.baking = { id: null };
-  $('bake').disabled = true;
-  label.title = '';
-  try {
-    const body = { pipeline: pipeline.name, settings: qualitySettings(pipeline) };
-    if (state.source && state.source.inline) body.scene = state.source.json; else body.scene_name = $('scene').value;
-    let r = await api('/api/bakes', { method: 'POST', body: JSON.stringify(body) });
-    if (r.status >= 400) throw new Error(r.body.error);
-    state.baking.id = r.body.id;
-    $('bake-cancel').hidden = false;
-    for (;;) {
-      const job = r.body;
-      bar.value = job.progress;
-      label.textContent = job.state === 'running' ? `${job.stage} ${(100 * job.progress).toFixed(0)}%` : job.state;
-      if (job.state === 'done') {
-        label.textContent = `done${job.cache_hit ? ' (cached)' : ''} · ${pipeline.name}`;
-        label.title = Object.entries(job.stats || {}).map(([k, v]) => `${k} ${v}`).join(' · ');
-        if ($('pipeline').value === pipeline.name) hello(true);  // the view picks the product up
-        break;
-      }
-      if (job.state === 'failed' || job.state === 'cancelled') {
-        label.textContent = job.state + (job.error ? ': ' + job.error : '');
-        break;
-      }
-      await new Promise((ok) => setTimeout(ok, 250));
-      r = await api('/api/bakes/' + state.baking.id);
-      if (r.status >= 400) throw new Error(r.body.error);
-    }
-  } catch (e) {
-    label.textContent = 'error: ' + e.message;
-  } finally {
-    state.baking = null;
-    $('bake-cancel').hidden = true;
-    $('bake').disabled = !(selected() || {}).bakes;
-  }
-}
-function cancelBake() {
-  if (state.baking && state.baking.id) api('/api/bakes/' + state.baking.id, { method: 'DELETE' });
-}
-
-// A still view is refined (docs/API.md, "Refinement"): each frame may carry its estimated error
-// (relative RMSE against the reference) and how far refining got; this says both in a line.
-function refineText(refine, error) {
-  const e = error === undefined ? '' : `error ≈ ${(100 * error).toPrecision(2)} %`;
-  if (!refine) return e;
-  if (refine.state === 'converged') return `${e} · converged (under ${100 * refine.floor} %)`;
-  if (refine.state === 'done') return e ? `${e} · refined` : '';
-  const step = refine.stage === 'reference' ? `reference pass ${refine.pass}, ${refine.spp} spp`
-    : refine.stage === 'quality' ? `quality ${refine.quality}` : 'full size';
-  return `${e ? e + ' · ' : ''}converging (${step})`;
-}
-function showRefine(refine, error) {
-  $('refine').textContent = refineText(refine, error);
-  $('refine-next').textContent = '';
-  canvas.dataset.error = error === undefined ? '' : String(error);
-  canvas.dataset.refine = refine ? refine.state : '';
-}
-function showRefineNote(msg) {
-  const r = msg.refine;
-  if (r.state !== 'converging') return showRefine(r, msg.shown_error_estimate);
-  const step = r.stage === 'reference' ? `reference pass ${r.pass}, ${r.spp} spp` : `quality ${r.quality}`;
-  const e = msg.error_estimate === undefined ? '' : ` ≈ ${(100 * msg.error_estimate).toPrecision(2)} %`;
-  $('refine-next').textContent = `next: ${step}${e}`;
-}
-
-// The plan: every stage, run or skipped, and why, in a list under the view.
-function showPlan(plan) {
-  const items = (plan && plan.stages) || [];
-  $('plan').replaceChildren(...items.map((s) => {
-    const li = document.createElement('li');
-    li.textContent = `${s.run ? 'ran' : 'skipped'} ${s.stage}: ${s.reason}`;
-    if (!s.run) li.className = 'skipped';
-    return li;
-  }));
-  $('plan-box').querySelector('summary').textContent =
-    `plan: ${plan ? plan.pipeline : ''}, ${items.filter((s) => s.run).length} stages run, ${items.filter((s) => !s.run).length} skipped`;
-}
 
 // The scene the server now shows: its camera becomes the orbit, its lights the light controls,
 // its bounds the zoom's range, its medium the material controls.
@@ -252,129 +194,17 @@ function sceneArrived(msg) {
   state.radiusRange = [reach * 1.15, reach * 15];
   state.lights = msg.lights.map((l) => ({ ...l }));
   const image = msg.source && msg.source.image;
-  canvas.width = marker.width = (image && image.width) || 512;
-  canvas.height = marker.height = (image && image.height) || 512;
+  // Setting a canvas's size clears it: only when it changes, so that the frame on show stays
+  // until the new hello's first frame comes (a long one shows the busy line over it).
+  const w = (image && image.width) || 512, h = (image && image.height) || 512;
+  if (canvas.width !== w || canvas.height !== h) {
+    canvas.width = marker.width = w;
+    canvas.height = marker.height = h;
+  }
   $('frame').style.aspectRatio = `${canvas.width} / ${canvas.height}`;
   lightControls();
   materialControls();
   drawMarker();
-}
-
-// The light controls edit the scene's first light (the one shift-drag moves); the others stay.
-function lightControls() {
-  const l = state.lights[0];
-  $('light-index').textContent = l ? `1 of ${state.lights.length} (${l.type})` : '(none)';
-  if (!l) return;
-  $('light-color').value = hex(l.color);
-  $('light-intensity').value = l.type === 'directional' ? l.irradiance : l.intensity;
-}
-
-// Where the first light is on screen: a ring on the marker canvas (a directional light: none).
-function drawMarker() {
-  const m = marker.getContext('2d');
-  m.clearRect(0, 0, marker.width, marker.height);
-  const l = state.lights[0];
-  if (!l || !l.position) return;
-  const { forward, right, up } = cameraBasis();
-  const d = sub(l.position, cameraPosition()), z = dot(d, forward);
-  if (z <= 0) return;
-  const t = Math.tan((state.orbit.fov * Math.PI) / 360), aspect = marker.width / marker.height;
-  const x = (dot(d, right) / z / (t * aspect) + 1) / 2 * marker.width;
-  const y = (1 - dot(d, up) / z / t) / 2 * marker.height;
-  m.strokeStyle = '#ff0'; m.lineWidth = 2;
-  m.beginPath(); m.arc(x, y, 8, 0, 2 * Math.PI); m.stroke();
-  m.beginPath(); m.arc(x, y, 2, 0, 2 * Math.PI); m.fillStyle = '#ff0'; m.fill();
-  marker.dataset.x = x.toFixed(1);
-  marker.dataset.y = y.toFixed(1);
-}
-
-const DENSITY_FIELDS = {
-  constant: [['value', 1]],
-  noise: [['scale', 3], ['octaves', 5], ['min', 0.2], ['max', 1], ['seed', 1]],
-  layers: [['thickness', 0.25]],
-  blocker: [['sigma_a', 1000]],
-  grid: [],
-};
-// The material controls show the scene's medium: each coefficient as a colour (its channels over
-// the largest) times a density (the largest channel).
-function materialControls() {
-  const m = (state.source && state.source.json && state.source.json.medium) || {};
-  const split = (v, fallback) => {
-    const c = v || fallback, k = Math.max(...c);
-    return { color: hex(k > 0 ? scale(c, 1 / k) : [1, 1, 1]), k };
-  };
-  const s = split(m.sigma_s, [1, 1, 1]), a = split(m.sigma_a, [0.1, 0.1, 0.1]);
-  $('m-scatter-color').value = s.color; $('m-scatter').value = +s.k.toPrecision(4);
-  $('m-absorb-color').value = a.color; $('m-absorb').value = +a.k.toPrecision(4);
-  $('m-g').value = m.g ?? 0;
-  $('m-ior').value = m.ior ?? 1;
-  const density = m.density || { type: 'constant' };
-  const types = Object.keys(DENSITY_FIELDS);
-  fillSelect($('m-density'), types.map((t) => ({ value: t, disabled: t === 'grid' && density.type !== 'grid' })), density.type);
-  densityParams(density);
-}
-function densityParams(density) {
-  const fields = DENSITY_FIELDS[$('m-density').value] || [];
-  $('m-density-params').replaceChildren(...fields.map(([key, fallback]) => {
-    const label = document.createElement('label');
-    const input = document.createElement('input');
-    input.type = 'number'; input.step = 'any'; input.dataset.key = key;
-    input.value = density && density[key] !== undefined ? density[key] : fallback;
-    label.append(`density ${key} `, input);
-    return label;
-  }));
-}
-
-// The edited material: a copy of the scene's JSON with a new medium, sent as an inline scene (the
-// server keeps the view; the plan says what it rebakes).
-function applyMaterial() {
-  if (!state.source) return;
-  const json = structuredClone(state.source.json);
-  const old = json.medium || {};
-  const density = $('m-density').value === (old.density || {}).type ? { ...old.density } : { type: $('m-density').value };
-  if (density.type === 'blocker' && !density.shape) density.shape = { shape: 'sphere', radius: 0.4 };
-  for (const input of $('m-density-params').querySelectorAll('input')) density[input.dataset.key] = Number(input.value);
-  json.medium = { ...old, sigma_s: scale(rgb($('m-scatter-color').value), Number($('m-scatter').value)),
-                  sigma_a: scale(rgb($('m-absorb-color').value), Number($('m-absorb').value)),
-                  g: Number($('m-g').value), ior: Number($('m-ior').value), density };
-  if (state.source.inline) state.source = { inline: true, json };
-  else state.medium = json.medium;  // a shipped scene: the server swaps its medium
-  hello(true);
-}
-
-// A dropped or chosen mesh file: uploaded (POST /api/assets), then shown in the current medium.
-async function upload(file) {
-  const format = file.name.split('.').pop().toLowerCase();
-  $('status').textContent = `uploading ${file.name}`;
-  const r = await api(`/api/assets?kind=mesh&format=${encodeURIComponent(format)}`,
-                      { method: 'POST', body: file, headers: { 'Content-Type': 'application/octet-stream' } });
-  if (r.status >= 400) return showError(`upload of ${file.name} failed: ${r.body.error}`);
-  const json = structuredClone((state.source && state.source.json) || {});
-  json.mesh = { asset: r.body.id, fit: 2 };
-  if (json.medium && json.medium.density && ['blocker', 'grid'].includes(json.medium.density.type))
-    json.medium.density = { type: 'constant' };
-  state.source = { inline: true, json };
-  state.medium = null;
-  $('status').textContent = `uploaded ${file.name} (${r.body.triangles} triangles)`;
-  canvas.dataset.uploaded = r.body.id;
-  hello(false);
-}
-
-function download(blob, name) {
-  const a = document.createElement('a');
-  a.href = URL.createObjectURL(blob);
-  a.download = name;
-  document.body.append(a);
-  a.click();
-  a.remove();
-  setTimeout(() => URL.revokeObjectURL(a.href), 10000);
-}
-// The linear frame: the session renders the current view at full size as EXR (its "snapshot"
-// message); that frame is downloaded, not drawn.
-function saveExr() {
-  state.snapshot = true;
-  $('status').textContent = 'rendering the EXR';
-  send({ type: 'snapshot' }, 'h' + state.request);
 }
 
 function frameArrived(header, bitmap) {
@@ -389,7 +219,8 @@ function frameArrived(header, bitmap) {
   if (t.length) $('rtt').textContent = (performance.now() - Math.max(...t)).toFixed(0);
   for (const k of state.sentAt.keys()) if (performance.now() - state.sentAt.get(k) > 60000) state.sentAt.delete(k);
   $('size').textContent = `${header.width}×${header.height}${header.reduced ? ' (moving)' : ''}`;
-  $('stages').textContent = `${header.pipeline}: ` + Object.entries(header.timings_ms)
+  const composite = header.refine && header.refine.stage === 'multiple' ? `${$('pipeline').value} + multiple from ` : '';
+  $('stages').textContent = `${composite}${header.pipeline}: ` + Object.entries(header.timings_ms)
     .map(([k, v]) => `${k} ${v.toFixed(1)}`).join(' · ') + ' ms';
   showRefine(header.refine, header.error_estimate);
   showPlan(header.plan);
@@ -466,73 +297,12 @@ setInterval(() => {
   if (busy) $('busy-text').textContent = `rendering ${((now - state.waitingSince) / 1000).toFixed(0)} s`;
 }, 250);
 
-// Orbit and zoom, by mouse, touch (one finger orbits, two pinch) and keyboard.
-function orbitBy(dx, dy) {
-  state.orbit.yaw -= dx;
-  state.orbit.pitch = Math.max(-1.4, Math.min(1.4, state.orbit.pitch + dy));
-  sendCamera();
-}
-function zoomBy(factor) {
-  const [lo, hi] = state.radiusRange;
-  state.orbit.radius = Math.max(lo, Math.min(hi, state.orbit.radius * factor));
-  sendCamera();
-}
-// Shift-drag: the first light moves in the screen's plane, as far from the target as it was.
-function moveLight(dx, dy) {
-  const l = state.lights[0];
-  if (!l || !l.position) return;
-  const { right, up } = cameraBasis();
-  const d = Math.hypot(...sub(l.position, state.orbit.target));
-  l.position = add(l.position, add(scale(right, dx * d), scale(up, -dy * d)));
-  sendLights();
-}
-const pointers = new Map();
-canvas.addEventListener('pointerdown', (e) => {
-  pointers.set(e.pointerId, { x: e.clientX, y: e.clientY });
-  canvas.setPointerCapture(e.pointerId);
-  canvas.focus();
-});
-const lift = (e) => pointers.delete(e.pointerId);
-canvas.addEventListener('pointerup', lift);
-canvas.addEventListener('pointercancel', lift);
-canvas.addEventListener('pointermove', (e) => {
-  const last = pointers.get(e.pointerId);
-  if (!last) return;
-  if (pointers.size === 2) {  // pinch: the fingers' distance before and after
-    const [a, b] = [...pointers.values()];
-    const other = a === last ? b : a;
-    const before = Math.hypot(last.x - other.x, last.y - other.y);
-    const after = Math.hypot(e.clientX - other.x, e.clientY - other.y);
-    pointers.set(e.pointerId, { x: e.clientX, y: e.clientY });
-    if (before > 0 && after > 0) zoomBy(before / after);
-    return;
-  }
-  const w = canvas.getBoundingClientRect().width;
-  const dx = ((e.clientX - last.x) / w) * 4, dy = ((e.clientY - last.y) / w) * 4;
-  pointers.set(e.pointerId, { x: e.clientX, y: e.clientY });
-  if (e.shiftKey) moveLight(dx / 2, dy / 2); else orbitBy(dx, dy);
-});
-canvas.addEventListener('wheel', (e) => { e.preventDefault(); zoomBy(Math.exp(e.deltaY * 0.001)); }, { passive: false });
-canvas.addEventListener('keydown', (e) => {
-  const step = 0.08, keys = { ArrowLeft: [step, 0], ArrowRight: [-step, 0], ArrowUp: [0, step], ArrowDown: [0, -step] };
-  if (keys[e.key]) { e.preventDefault(); (e.shiftKey ? moveLight : orbitBy)(...keys[e.key].map((v) => (e.shiftKey ? -v / 2 : v))); }
-  else if (e.key === '+' || e.key === '=') zoomBy(0.9);
-  else if (e.key === '-') zoomBy(1.1);
-});
-// Drag and drop of a mesh file onto the view.
-$('frame').addEventListener('dragover', (e) => { e.preventDefault(); $('drop-hint').hidden = false; });
-$('frame').addEventListener('dragleave', () => { $('drop-hint').hidden = true; });
-$('frame').addEventListener('drop', (e) => {
-  e.preventDefault();
-  $('drop-hint').hidden = true;
-  if (e.dataTransfer.files[0]) upload(e.dataTransfer.files[0]);
-});
-$('upload').addEventListener('change', (e) => { if (e.target.files[0]) upload(e.target.files[0]); });
 
 $('scene').addEventListener('change', () => { state.source = null; state.medium = null; fillPipelines($('pipeline').value); pipelineChanged(); hello(false); });
 $('pipeline').addEventListener('change', () => { pipelineChanged(); hello(true); });
 $('quality').addEventListener('change', () => hello(true));
-$('terms').addEventListener('change', () => hello(true));
+$('terms').addEventListener('change', () => { compositeControl(); hello(true); });
+$('composite').addEventListener('change', () => hello(true));
 $('exposure').addEventListener('change', () => hello(true));
 $('bake').addEventListener('click', bake);
 $('bake-cancel').addEventListener('click', cancelBake);

@@ -3,9 +3,11 @@
 #include <memory>
 #include <numbers>
 
+#include "bake/cache.hpp"
 #include "core/errors.hpp"
 #include "pipelines/common/raster.hpp"
 #include "pipelines/common/stage_clock.hpp"
+#include "scene/mesh.hpp"
 
 namespace scatter {
 
@@ -22,9 +24,12 @@ Plan ThicknessPipeline::describe(const Scene& scene, Terms terms,
                           "medium (constant density); use reference");
   Plan p{name(), terms, {}};
   p.stages.push_back({"bake", false, "homogeneous medium: no optical-depth bake is needed"});
-  p.stages.push_back({"shadow_maps", !scene.lights.empty(),
-                      std::to_string(scene.lights.size()) + " lights, " +
-                          std::to_string(s.shadow_size) + "^2 distance maps"});
+  const std::string maps = std::to_string(scene.lights.size()) + " lights, " +
+                           std::to_string(s.shadow_size) + "^2 distance maps";
+  if (kept_shadows(shadows_key(scene, s)))
+    p.stages.push_back({"shadow_maps", false, "kept: " + maps + " of the same mesh and lights"});
+  else
+    p.stages.push_back({"shadow_maps", !scene.lights.empty(), maps});
   p.stages.push_back({"depth_peel", true, "front and second surface along each view ray"});
   p.stages.push_back({"integrate", true, std::to_string(s.steps) + " pieces per view segment"});
   if (scene.medium.ior != 1.0)
@@ -33,6 +38,63 @@ Plan ThicknessPipeline::describe(const Scene& scene, Terms terms,
          "refraction and Fresnel are neglected (ior " + std::to_string(scene.medium.ior) + ")"});
   p.stages.push_back({"readback", true, "linear RGB to the host"});
   return p;
+}
+
+std::string ThicknessPipeline::mesh_key(const Scene& scene) {
+  return scene.mesh_id.empty() ? mesh_digest(*scene.mesh) : scene.mesh_id;
+}
+
+// What the shadow maps depend on: the mesh (its bounds place the light's frustum), each light's
+// type, position and direction, and the maps' size.
+std::string ThicknessPipeline::shadows_key(const Scene& scene, const ThicknessSettings& s) {
+  BakeKey k;
+  k.add("mesh", mesh_key(scene)).add("shadow_size", s.shadow_size);
+  for (const Light& l : scene.lights) {
+    k.add("type", static_cast<double>(l.type));
+    for (int c = 0; c < 3; ++c) k.add("position", l.position[c]).add("direction", l.direction[c]);
+  }
+  return k.hex();
+}
+
+const ThicknessPipeline::Shadows* ThicknessPipeline::kept_shadows(const std::string& key) const {
+  for (const Shadows& s : kept_)
+    if (s.key == key) return &s;
+  return nullptr;
+}
+
+const MeshBuffers& ThicknessPipeline::mesh(const Scene& scene) {
+  std::string key = mesh_key(scene);
+  if (!mesh_ || key != mesh_key_) {
+    mesh_.reset();  // the old buffers go first
+    mesh_ = std::make_unique<MeshBuffers>(*scene.mesh);
+    mesh_key_ = std::move(key);
+  }
+  return *mesh_;
+}
+
+const ThicknessPipeline::Shadows& ThicknessPipeline::shadows(const Scene& scene,
+                                                             const ThicknessSettings& s,
+                                                             const MeshBuffers& mesh) {
+  std::string key = shadows_key(scene, s);
+  for (auto it = kept_.begin(); it != kept_.end(); ++it)
+    if (it->key == key) {
+      kept_.splice(kept_.begin(), kept_, it);
+      return kept_.front();
+    }
+  // One distance map per light, seen from the light.
+  Shadows made{std::move(key), {}, {}};
+  for (const Light& l : scene.lights) {
+    LightView v = light_view(l, scene, "thickness");
+    made.maps.push_back(std::make_unique<RenderTarget>(s.shadow_size, s.shadow_size));
+    draw_distance(distance_program_.get(), mesh, *made.maps.back(), v.view, v.projection, v.origin,
+                  v.direction, v.along_direction, 0,
+                  1e30f);  // off the object: no medium on the way
+    made.light_matrices.push_back(v.projection * v.view);
+  }
+  glFinish();
+  if (kept_.size() >= kKeptShadowSets) kept_.pop_back();
+  kept_.push_front(std::move(made));
+  return kept_.front();
 }
 
 RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& request) {
@@ -48,21 +110,13 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
     empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
   }
   StageClock clock(result.timings);
-  MeshBuffers mesh(*scene.mesh);
+  const MeshBuffers& mesh = this->mesh(scene);
   const GLuint dist = distance_program_.get(), integ = integrate_program_.get();
-
-  // One distance map per light, seen from the light.
-  std::vector<std::unique_ptr<RenderTarget>> shadows;
-  std::vector<Mat4> light_matrices;
-  for (const Light& l : scene.lights) {
-    LightView v = light_view(l, scene, "thickness");
-    shadows.push_back(std::make_unique<RenderTarget>(s.shadow_size, s.shadow_size));
-    draw_distance(dist, mesh, *shadows.back(), v.view, v.projection, v.origin, v.direction,
-                  v.along_direction, 0, 1e30f);  // off the object: no medium on the way
-    light_matrices.push_back(v.projection * v.view);
-  }
-  glFinish();
-  clock.stop("shadow_maps");
+  const bool kept = kept_shadows(shadows_key(scene, s)) != nullptr;
+  const Shadows& sh = shadows(scene, s, mesh);
+  const auto& shadow_maps = sh.maps;
+  const auto& light_matrices = sh.light_matrices;
+  if (!kept) clock.stop("shadow_maps");
 
   // Depth peeling from the camera: the first surface, then the next one behind it.
   CameraMatrices cam = camera_matrices(scene);
@@ -79,7 +133,7 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   for (size_t i = 0; i < scene.lights.size(); ++i) {
     const Light& l = scene.lights[i];
     LightView v = light_view(l, scene, "thickness");
-    glBindTextureUnit(static_cast<GLuint>(2 + i), shadows[i]->color_texture());
+    glBindTextureUnit(static_cast<GLuint>(2 + i), shadow_maps[i]->color_texture());
     uniform1i(integ, indexed("shadow_maps", i), static_cast<int>(2 + i));
     uniform_matrix(integ, indexed("light_matrix", i), light_matrices[i]);
     // The distance a directional light's map stores is measured from its origin plane.

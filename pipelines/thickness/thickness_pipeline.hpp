@@ -8,9 +8,19 @@
 // docs/pipelines/thickness.md). Approximations (as the blog): only the first segment inside the
 // object is integrated, the light enters at the surface nearest to it, and refraction and Fresnel
 // at the boundary are neglected.
+//
+// Kept between frames (a live view's camera-only changes cost only the depth peel and the
+// integral): the mesh's GL buffers, and the shadow maps of the last kKeptShadowSets light sets
+// (by mesh, lights and shadow_size: a moving view's draft maps and the still view's both stay).
 #pragma once
 
+#include <list>
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "gpu/gl_objects.hpp"
+#include "pipelines/common/raster.hpp"
 #include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 
@@ -33,10 +43,26 @@ class ThicknessPipeline : public Pipeline {
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
 
  private:
+  static constexpr size_t kKeptShadowSets = 2;
+  struct Shadows {
+    std::string key;  // shadows_key()
+    std::vector<std::unique_ptr<RenderTarget>> maps;
+    std::vector<Mat4> light_matrices;
+  };
   // The stages for this scene, terms and settings.
   Plan describe(const Scene& scene, Terms terms, const ThicknessSettings& s) const;
+  static std::string mesh_key(const Scene& scene);
+  static std::string shadows_key(const Scene& scene, const ThicknessSettings& s);
+  const Shadows* kept_shadows(const std::string& key) const;
+  // The shadow maps for the scene's lights: kept ones, else drawn (and kept).
+  const Shadows& shadows(const Scene& scene, const ThicknessSettings& s, const MeshBuffers& mesh);
+  const MeshBuffers& mesh(const Scene& scene);
+
   gpu::Gpu& gpu_;
   gpu::GlObject distance_program_, integrate_program_, empty_vao_;
+  std::string mesh_key_;
+  std::unique_ptr<MeshBuffers> mesh_;
+  std::list<Shadows> kept_;  // most recently used first
 };
 
 }  // namespace scatter

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "../test_util.hpp"
+#include "jpeg_quality.hpp"
 
 namespace scatter {
 namespace {
@@ -71,6 +72,28 @@ TEST(ImageIo, UnknownExtensionAndUnwritablePathsAreErrors) {
   EXPECT_THROW(write_image(ramp(), dir / "no" / "such" / "dir.png"), std::runtime_error);
   write_image(ramp(), dir / "a.jpg");
   EXPECT_TRUE(std::filesystem::file_size(dir / "a.jpg") > 0);
+}
+
+// Noise: the worst case for JPEG, so that quality shows in the size.
+Image noise(int w, int h) {
+  Image im(w, h);
+  unsigned x = 12345;
+  for (float& v : im.rgb) v = float((x = x * 1664525u + 1013904223u) >> 8) / float(1 << 24);
+  return im;
+}
+
+TEST(ImageIo, JpegIsEncodedAtTheAskedQuality) {
+  Image im = noise(64, 64);
+  std::string low = encode_image(im, "jpg", {}, kMovingJpegQuality);
+  std::string high = encode_image(im, "jpg", {}, kJpegQuality);
+  EXPECT_EQ(test::jpeg_quality(low), kMovingJpegQuality);
+  EXPECT_EQ(test::jpeg_quality(high), kJpegQuality);
+  EXPECT_EQ(test::jpeg_quality(encode_image(im, "jpg")), kJpegQuality);  // the default
+  EXPECT_EQ(test::jpeg_quality(encode_image(im, "jpg", {}, 20)), 20);
+  EXPECT_LT(low.size(), high.size());
+  EXPECT_THROW(encode_image(im, "jpg", {}, 0), std::invalid_argument);
+  EXPECT_THROW(encode_image(im, "jpg", {}, 101), std::invalid_argument);
+  EXPECT_EQ(encode_image(im, "png", {}, 50), encode_image(im, "png"));  // PNG ignores it
 }
 
 }  // namespace

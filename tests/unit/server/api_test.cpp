@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "../test_util.hpp"
+#include "gpu/embedded_sources.hpp"
 
 namespace scatter::server {
 namespace {
@@ -143,12 +144,69 @@ TEST_F(ApiTest, UnknownRoutesMethodsAndBodiesAreClearErrors) {
   EXPECT_EQ(json(r)["field"], "scene.image.width");
 }
 
+// A shipped scene whose mesh file is missing is the server's problem: 503 naming the scene and
+// the file, for a render and a bake alike; the scene works again once the file is there.
+TEST_F(ApiTest, AShippedSceneWithAMissingMeshIs503NamingSceneAndFile) {
+  auto dir = test::scratch_dir("api_missing_mesh");
+  nlohmann::json scene = test::minimal_scene();
+  scene["mesh"] = {{"file", "gone.obj"}};
+  test::write_file(dir / "lost.json", scene.dump());
+  ApiOptions o = options("");
+  o.scenes_dir = dir;
+  Api api(o, queue_, metrics_);
+  for (const char* route : {"/api/render", "/api/bakes"}) {
+    HttpResponse r = api.handle(
+        {"POST", route, R"({"scene_name": "lost", "pipeline": "single", "format": "json"})", ""});
+    EXPECT_EQ(r.status, 503) << route << " " << r.body;
+    EXPECT_EQ(json(r)["field"], "scene_name");
+    std::string error = json(r)["error"];
+    EXPECT_NE(error.find("\"lost\""), std::string::npos) << error;
+    EXPECT_NE(error.find("\"gone.obj\""), std::string::npos) << error;
+    EXPECT_EQ(error.find(dir.string()), std::string::npos) << error;  // no server paths
+  }
+  test::write_file(dir / "gone.obj",
+                   "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  EXPECT_TRUE(SceneLibrary::missing_files(dir / "lost.json").empty());
+  HttpResponse r =
+      api.handle({"POST", "/api/render",
+                  R"({"scene_name": "lost", "pipeline": "surface", "format": "json"})", ""});
+  EXPECT_EQ(r.status, 200) << r.body;
+}
+
+// An assets folder the server cannot make is its own problem: 503, naming no server path.
+TEST_F(ApiTest, UploadsTheServerCannotStoreAre503) {
+  auto dir = test::scratch_dir("api_unwritable_assets");
+  test::write_file(dir / "blocked", "a file where the folder should go");
+  ApiOptions o = options("");
+  o.assets_dir = dir / "blocked" / "assets";
+  Api api(o, queue_, metrics_);
+  HttpResponse r = api.handle({"POST", "/api/assets?kind=mesh&format=obj", "v 0 0 0\n", ""});
+  EXPECT_EQ(r.status, 503) << r.body;
+  EXPECT_EQ(json(r)["field"], "body");
+  EXPECT_NE(json(r)["error"].get<std::string>().find("cannot store"), std::string::npos) << r.body;
+  EXPECT_EQ(r.body.find(dir.string()), std::string::npos) << r.body;
+}
+
 TEST_F(ApiTest, ServesTheWebClient) {
   HttpResponse r = call("GET", "/");
   EXPECT_EQ(r.status, 200);
   EXPECT_EQ(r.content_type, "text/html; charset=utf-8");
   EXPECT_NE(r.body.find("<canvas id=\"view\""), std::string::npos);
   EXPECT_NE(call("GET", "/app.js").body.find("/api/ws"), std::string::npos);
+  // Every web/ file by its name, typed by its extension; nothing else, whatever the path says.
+  for (const auto& [name, text] : gpu::embedded_sources()) {
+    if (name.rfind("web/", 0) != 0) continue;
+    r = call("GET", name.substr(3));  // "web/app.js" -> "/app.js"
+    EXPECT_EQ(r.status, 200) << name;
+    EXPECT_EQ(r.body, std::string(text)) << name;
+  }
+  EXPECT_EQ(call("GET", "/style.css").content_type, "text/css; charset=utf-8");
+  for (const char* bad : {"/web/app.js", "/../CMakeLists.txt", "/%2e%2e/CMakeLists.txt",
+                          "/kernels/common/rng.cl", "/.app.js", "//app.js", "/app.js/",
+                          "/nothing.js", "/index", "/a/../app.js", "/app.js%00"}) {
+    EXPECT_EQ(call("GET", bad).status, 404) << bad;
+  }
+  EXPECT_EQ(call("POST", "/app.js").status, 404);
 }
 
 TEST_F(ApiTest, TokenIsRequiredWhenSet) {

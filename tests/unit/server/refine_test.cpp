@@ -188,6 +188,55 @@ TEST(RefineTest, WhatNeedsNoRefiningEndsAfterTheFullFrame) {
   EXPECT_EQ(good.take(*good.next(), exact).state, State::Converged);
 }
 
+// A composite: after the full frame of the single term, the multiple term from psf at half the
+// size, added to it (resampled) and sent; the higher quality's frame keeps it; the reference
+// passes are then of all terms, not the single term alone.
+TEST(RefineTest, ACompositeAddsTheMultipleTermToTheStillFrames) {
+  Composite c{"psf", {{"step", 2}}, 0.5};
+  RefineOptions o{.floor = 0.01, .max_passes = 4, .composite = c};
+  Refinement r(sphere(), "thickness", "single", {}, o);
+  auto step = r.next();
+  ASSERT_EQ(step->stage, Stage::Full);
+  RenderResult full = result(0.1);  // 4 x 4 of 1
+  EXPECT_TRUE(r.take(*step, full).send);
+  step = r.next();
+  ASSERT_TRUE(step);
+  EXPECT_EQ(step->stage, Stage::Multiple);
+  EXPECT_EQ(step->pipeline, "psf");
+  EXPECT_EQ(step->terms, "multiple");
+  EXPECT_EQ(step->settings, c.settings);
+  EXPECT_EQ(step->scale, 0.5);
+  RenderResult multiple;  // 2 x 2, rows of 0.5 and 1.5
+  multiple.image = Image(2, 2);
+  multiple.image.rgb = {0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 1.5f, 1.5f, 1.5f, 1.5f, 1.5f, 1.5f};
+  multiple.error_estimate = 0.3;  // psf's own: not the composite's
+  auto out = r.take(*step, multiple);
+  EXPECT_TRUE(out.send);
+  EXPECT_FALSE(out.estimate);
+  ASSERT_EQ(multiple.image.width, 4);
+  ASSERT_EQ(multiple.image.height, 4);
+  // Rows 0..3 sample the small image's rows at -0.25, 0.25, 0.75, 1.25: 0.5, 0.75, 1.25, 1.5.
+  const float rows[] = {0.5f, 0.75f, 1.25f, 1.5f};
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) EXPECT_FLOAT_EQ(multiple.image.at(x, y)[1], 1 + rows[y]);
+  EXPECT_EQ(r.describe(*step, out.state)["stage"], "multiple");
+  EXPECT_EQ(r.describe(*step, out.state)["pipeline"], "psf");
+  step = r.next();
+  ASSERT_EQ(step->stage, Stage::Quality);
+  RenderResult high = result(0.2);
+  r.take(*step, high);
+  EXPECT_FLOAT_EQ(high.image.at(0, 3)[0], 2.5f);  // its single term plus the multiple term
+  step = r.next();
+  ASSERT_TRUE(step);
+  EXPECT_EQ(step->stage, Stage::Reference);
+  EXPECT_EQ(step->terms, "all");
+  EXPECT_EQ(step->settings.count("mc"), 0u);
+  // A multiple term the limits would refuse is left out: the refinement is as without one.
+  Refinement brief(sphere(), "thickness", "single", {}, {.max_render_s = 1e-9, .composite = c});
+  RenderResult again = result(0.1);
+  EXPECT_EQ(brief.take(*brief.next(), again).state, State::Done);
+}
+
 TEST(RefineTest, TheReferencesOwnMonteCarloSkipsItsPresetsAndKeepsItsSettings) {
   Refinement r(sphere(), "reference", "all", {{"max_depth", 8}, {"seed", 5}}, {});
   RenderResult full = result(1.0, 0.3, 64, 1.0);

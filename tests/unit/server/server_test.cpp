@@ -8,6 +8,7 @@
 #include <iostream>
 #include <thread>
 
+#include "../pipelines/jpeg_quality.hpp"
 #include "../test_util.hpp"
 #include "http_client.hpp"
 
@@ -237,6 +238,64 @@ TEST_F(ServerTest, WebSocketHelloRequestKeepViewAndCancel) {
   EXPECT_EQ(m["type"], "cancelled") << m.dump();
   EXPECT_EQ(m["request"], 8);
   for (long long r : requests) EXPECT_EQ(r, 8);
+  c.close();
+}
+
+// JPEG frames while the camera moves are encoded at the lower quality, the still frame after them
+// at the higher; each header says which, and the bytes agree.
+TEST_F(ServerTest, WebSocketJpegQualityIsLowerWhileMoving) {
+  WsClient c(server_->port());
+  nlohmann::json h = hello();
+  h["format"] = "jpg";
+  c.send(h);
+  std::string image;
+  nlohmann::json f = c.next_frame(image);
+  ASSERT_EQ(f["type"], "frame") << f.dump();
+  EXPECT_EQ(f["reduced"], false);
+  EXPECT_EQ(f["jpeg_quality"], kJpegQuality);
+  EXPECT_EQ(test::jpeg_quality(image), kJpegQuality);
+  c.send(pose(1));
+  c.send({{"type", "ack"}, {"frame", f["frame"]}});
+  f = c.next_frame(image);
+  ASSERT_EQ(f["type"], "frame") << f.dump();
+  EXPECT_EQ(f["reduced"], true);
+  EXPECT_EQ(f["jpeg_quality"], kMovingJpegQuality);
+  EXPECT_EQ(test::jpeg_quality(image), kMovingJpegQuality);
+  c.send({{"type", "ack"}, {"frame", f["frame"]}});
+  f = c.next_frame(image);  // still again: the full frame
+  ASSERT_EQ(f["type"], "frame") << f.dump();
+  EXPECT_EQ(f["reduced"], false);
+  EXPECT_EQ(test::jpeg_quality(image), kJpegQuality);
+  c.close();
+}
+
+// A hello's composite names a pipeline that renders the multiple term, for frames of the single
+// (or surface) term; anything else is an error naming the field, and the session goes on.
+TEST_F(ServerTest, WebSocketCompositeIsCheckedByField) {
+  WsClient c(server_->port());
+  auto error_for = [&](nlohmann::json composite, const std::string& terms) {
+    nlohmann::json h = hello();
+    h["pipeline"] = "thickness";
+    h["terms"] = terms;
+    h["composite"] = composite;
+    c.send(h);
+    return c.next_json();
+  };
+  nlohmann::json e = error_for({{"pipeline", "surface"}}, "single");
+  EXPECT_EQ(e["type"], "error") << e.dump();
+  EXPECT_EQ(e["field"], "composite.pipeline");
+  EXPECT_NE(e["error"].get<std::string>().find("multiple"), std::string::npos) << e.dump();
+  EXPECT_EQ(error_for({{"pipeline", "nope"}}, "single")["field"], "composite.pipeline");
+  EXPECT_EQ(error_for({{"pipeline", "psf"}, {"scale", 2}}, "single")["field"], "composite.scale");
+  EXPECT_EQ(error_for({{"pipeline", "psf"}, {"settings", {{"step", -1}}}}, "single")["field"],
+            "composite.settings.step");
+  EXPECT_EQ(error_for({{"pipeline", "psf"}, {"colour", 1}}, "single")["field"], "composite.colour");
+  nlohmann::json h = hello();  // surface renders only the surface term: "all" is refused anyway
+  h["composite"] = {{"pipeline", "psf"}};
+  c.send(h);
+  std::string image;
+  nlohmann::json f = c.next_frame(image);
+  EXPECT_EQ(f["type"], "frame") << f.dump();  // surface frames may take one
   c.close();
 }
 

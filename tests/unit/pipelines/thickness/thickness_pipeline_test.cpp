@@ -64,5 +64,39 @@ TEST(ThicknessPipeline, RefusesWhatItCannotRender) {
   EXPECT_THROW(p.render(sphere, {Terms::Single, {}, nullptr}), ValidationError);
 }
 
+// The shadow maps are kept while the mesh and lights stay: a camera-only change skips them (the
+// plan says so) and renders what a fresh pipeline renders; a moved light draws its maps again.
+TEST(ThicknessPipeline, KeepsItsShadowMapsWhileTheLightsStay) {
+  Scene s = load_scene(test::source_path("scenes/sphere.json"));
+  s.width = s.height = 48;
+  auto ran = [](const Plan& p, const std::string& stage) {
+    for (const auto& st : p.stages)
+      if (st.name == stage) return st.run;
+    return true;
+  };
+  auto timed = [](const RenderResult& r, const std::string& stage) {
+    for (const auto& t : r.timings)
+      if (t.stage == stage) return true;
+    return false;
+  };
+  ThicknessPipeline p(test::shared_gpu());
+  RenderRequest req{Terms::Single, {}, nullptr};
+  RenderResult first = p.render(s, req);
+  EXPECT_TRUE(ran(first.plan, "shadow_maps"));
+  EXPECT_TRUE(timed(first, "shadow_maps"));
+  s.camera.position = {1.5, 0.5, 3.5};  // the camera moves
+  EXPECT_FALSE(ran(p.plan(s, req), "shadow_maps"));
+  RenderResult moved = p.render(s, req);
+  EXPECT_FALSE(ran(moved.plan, "shadow_maps"));
+  EXPECT_FALSE(timed(moved, "shadow_maps"));
+  Image fresh = render(ThicknessPipeline(test::shared_gpu()), s);
+  EXPECT_EQ(moved.image.rgb, fresh.rgb);
+  EXPECT_NE(moved.image.rgb, first.image.rgb);
+  s.lights[0].position = s.lights[0].position + Vec3{0.5, 0, 0};  // the light moves
+  RenderResult lit = p.render(s, req);
+  EXPECT_TRUE(ran(lit.plan, "shadow_maps"));
+  EXPECT_EQ(lit.image.rgb, render(ThicknessPipeline(test::shared_gpu()), s).rgb);
+}
+
 }  // namespace
 }  // namespace scatter
