@@ -4,10 +4,27 @@
 // with transmittance tr so far, the radiance gained is tr S / (4 pi V) (1 - exp(-sigma_t ds)) /
 // sigma_t. Straight rays cross the voxels exactly (DDA); with a varying n the ray follows the
 // ray equation in fixed steps (refraction through the smoothed index).
+// The single term's phase (with_flow, g != 0): the voxel's light arrives about the mean direction
+// m = flow / (deposit summed over channels), |m| <= 1 (1 for one straight light); its
+// distribution taken as HG(|m|) about m, and HG(g) * HG(|m|) = HG(g |m|) (their Legendre
+// coefficients multiply), so the deposit is weighted by 4 pi HG(g |m|, m . w_out) with w_out the
+// way to the eye. The multiple term's emission stays isotropic.
 
-float3 emission(__global const float* deposit, __global const float* irr, float w_single,
-                float w_multiple, int v) {
-  return w_single * (float3)(deposit[v], deposit[v + 1], deposit[v + 2]) +
+float single_phase(__global const float* deposit, __global const float* flow, float g, int v,
+                   float3 to_eye) {
+  float total = deposit[v] + deposit[v + 1] + deposit[v + 2];
+  float3 m = (float3)(flow[v], flow[v + 1], flow[v + 2]);
+  float len = length(m);
+  if (!(total > 0.0f) || !(len > 1e-6f * total)) return 1.0f;
+  float ge = g * fmin(len / total, 1.0f);
+  return 4.0f * PI * hg_phase(dot(m, to_eye) / len, ge);
+}
+
+float3 emission(__global const float* deposit, __global const float* irr, __global const float* flow,
+                float w_single, float w_multiple, float g, int with_flow, int v, float3 to_eye) {
+  float ws = w_single;
+  if (with_flow && w_single != 0.0f) ws *= single_phase(deposit, flow, g, v, to_eye);
+  return ws * (float3)(deposit[v], deposit[v + 1], deposit[v + 2]) +
          w_multiple * (float3)(irr[v], irr[v + 1], irr[v + 2]);
 }
 
@@ -29,6 +46,7 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
                         __global const float* sigma_t, __global const float* n_field,
                         __global const float* grad_field, __global const float* deposit,
                         __global const float* irr, float w_single, float w_multiple,
+                        __global const float* flow, float g_phase, int with_flow,
                         __global const float* camera, int width, int height, int bend,
                         float delta, __global float* out) {
   int px = get_global_id(0), py = get_global_id(1);
@@ -47,8 +65,9 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
       int3 c;
       while (dda_next(&s, &a, &b, &c) && fmax(tr.x, fmax(tr.y, tr.z)) > 1e-6f) {
         int v = 3 * voxel_index(&g, c.x, c.y, c.z);
-        gather_piece(sigma_t, emission(deposit, irr, w_single, w_multiple, v), v, b - a,
-                     inv_4pi_v, &tr, &radiance);
+        gather_piece(sigma_t,
+                     emission(deposit, irr, flow, w_single, w_multiple, g_phase, with_flow, v, -d),
+                     v, b - a, inv_4pi_v, &tr, &radiance);
       }
     } else {
       float3 x = cam.position + d * t0;
@@ -62,8 +81,9 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
         int3 c = voxel_of(&g, 0.5f * (x0 + x));
         if (!inside_grid(&g, c)) break;
         int k = 3 * voxel_index(&g, c.x, c.y, c.z);
-        gather_piece(sigma_t, emission(deposit, irr, w_single, w_multiple, k), k, ds, inv_4pi_v,
-                     &tr, &radiance);
+        float3 e = emission(deposit, irr, flow, w_single, w_multiple, g_phase, with_flow, k,
+                            normalize(x0 - x));
+        gather_piece(sigma_t, e, k, ds, inv_4pi_v, &tr, &radiance);
       }
     }
   }

@@ -43,6 +43,22 @@ TEST(LblPipeline, SingleTermMatchesClosedFormOnTheAxis) {
   }
 }
 
+// With g != 0 the single term takes the HG phase about the light's direction: the light travels
+// -z and the eye looks back along it (scattering angle pi), so the isotropic value above times
+// 4 pi HG(g, -1) = (1 - g^2) / (1 + g)^3 = (1 - g) / (1 + g)^2.
+TEST(LblPipeline, SingleTermTakesThePhaseFunction) {
+  LblPipeline p(test::shared_gpu());
+  const double st = 2.0;
+  for (double g : {0.5, -0.3}) {
+    Scene s = axis_box(0.8 * st, 0.2 * st, 32);
+    s.medium.g = g;
+    double iso = 0.8 * st * 2.0 * -std::expm1(-4 * st) / (4 * std::numbers::pi * 2 * st);
+    double expected = iso * (1 - g) / ((1 + g) * (1 + g));
+    Vec3 got = p.render(s, {Terms::Single, {}}).image.at(4, 4);
+    EXPECT_NEAR(got.x, expected, 0.02 * expected) << "g " << g;
+  }
+}
+
 Scene sphere(int size, int voxels) {
   Scene s = load_scene(test::source_path("scenes/sphere.json"));
   s.width = s.height = size;
