@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "core/errors.hpp"
 #include "pipelines/lbl/lattice.hpp"
@@ -9,11 +10,59 @@
 namespace scatter::lbl {
 namespace {
 
+constexpr double kPi = std::numbers::pi;
+
 void check(bool ok, const char* field, const std::string& problem) {
   if (!ok) throw ValidationError(field, problem);
 }
 
+double hg(double cos_theta, double g) {
+  double d = 1 + g * g - 2 * g * cos_theta;
+  return (1 - g * g) / (4 * kPi * d * std::sqrt(d));
+}
+
+// The midpoints of `n` equal pieces of (0, 1) in u, mapped by mu = u^2 (denser at grazing
+// angles, where exp(-tau / mu) turns), with their weights d mu.
+std::vector<std::pair<double, double>> mu_nodes(int n) {
+  std::vector<std::pair<double, double>> nodes;
+  for (int i = 0; i < n; ++i) {
+    double u = (i + 0.5) / n;
+    nodes.push_back({u * u, 2 * u / n});
+  }
+  return nodes;
+}
+
 }  // namespace
+
+SingleScattering slab_single_scattering(const SlabParams& p) {
+  // A beam of unit power per unit area enters at cosine mu0 and scatters at optical depth t with
+  // density a exp(-t / mu0) / mu0 per unit depth; what goes up at cosine mu leaves with
+  // exp(-t / mu), down with exp(-(tau - t) / mu). The depth integrals in closed form:
+  //   up:   mu / (mu + mu0) (1 - exp(-tau (1 / mu0 + 1 / mu)))
+  //   down: (exp(-tau / mu) - exp(-tau / mu0)) / (k mu0), k = 1 / mu0 - 1 / mu
+  // and the directions by quadrature over mu and the azimuth (HG about the beam's direction).
+  SingleScattering s;
+  const double mu0 = p.mu0, tau = p.tau, sin0 = std::sqrt(std::max(0.0, 1 - mu0 * mu0));
+  const int azimuths = 256;
+  for (auto [mu, dmu] : mu_nodes(600)) {
+    double sin1 = std::sqrt(std::max(0.0, 1 - mu * mu));
+    double up = 0, down = 0;
+    for (int j = 0; j < azimuths; ++j) {
+      double c = std::cos(kPi * (j + 0.5) / azimuths);  // phi over (0, pi), doubled below
+      up += hg(sin0 * sin1 * c - mu0 * mu, p.g);
+      down += hg(sin0 * sin1 * c + mu0 * mu, p.g);
+    }
+    double dphi = 2 * kPi / azimuths;
+    double up_depth = mu / (mu + mu0) * -std::expm1(-tau * (1 / mu0 + 1 / mu));
+    double k = 1 / mu0 - 1 / mu;
+    double down_depth = std::abs(k * tau) < 1e-6
+                            ? tau / mu0 * std::exp(-tau / mu)
+                            : (std::exp(-tau / mu) - std::exp(-tau / mu0)) / (k * mu0);
+    s.R += p.albedo * up * dphi * up_depth * dmu;
+    s.T += p.albedo * down * dphi * down_depth * dmu;
+  }
+  return s;
+}
 
 void to_json(nlohmann::json& j, const LblSlabResult& r) {
   j = {{"solver", "lbl"},
@@ -23,6 +72,10 @@ void to_json(nlohmann::json& j, const LblSlabResult& r) {
        {"R_specular", r.R_specular},
        {"T_diffuse", r.T_diffuse},
        {"T_direct", r.T_direct},
+       {"R_single", r.R_single},
+       {"T_single", r.T_single},
+       {"R_lattice", r.R_lattice},
+       {"T_lattice", r.T_lattice},
        {"absorbed", r.absorbed},
        {"layers", r.layers},
        {"steps", r.steps},
@@ -49,7 +102,31 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   v.sigma_s.assign(3 * v.count(), static_cast<float>(p.albedo * dtau));
   v.sigma_t.assign(3 * v.count(), static_cast<float>(dtau));
   LatticeOptions lo{.blocked = false, .edges = {Edge::Periodic, Edge::Periodic, Edge::Open}};
-  Lattice lattice(cl, lattice_coefficients(v, p.g), lo);
+  LatticeCoefficients coeffs = lattice_coefficients(v, p.g);
+  // Escape: per layer, the transport's chance that isotropic emission there leaves without
+  // another collision (the delta-Eddington scaled medium) against the lattice's own (1/6 up and
+  // 1/6 down through the layers' (1 - pt); sideways packets never leave a periodic column).
+  const auto esc_nodes = mu_nodes(400);
+  const double dtau_s = (1 - p.albedo * p.g) * dtau;
+  std::vector<float> escape(3 * v.count(), 0.f);
+  if (o.escape) {
+    const double keep = 1 - coeffs.pt[0];
+    for (int k = 0; k < r.layers; ++k) {
+      double up = 0, down = 0;
+      double t0 = k * dtau_s, t1 = (k + 1) * dtau_s, b0 = p.tau * (1 - p.albedo * p.g) - t1,
+             b1 = b0 + dtau_s;
+      for (auto [mu, dmu] : esc_nodes) {
+        up += mu * (std::exp(-t0 / mu) - std::exp(-t1 / mu)) * dmu;
+        down += mu * (std::exp(-b0 / mu) - std::exp(-b1 / mu)) * dmu;
+      }
+      double exact = (up + down) / (2 * dtau_s);
+      double lat = (std::pow(keep, k) + std::pow(keep, r.layers - 1 - k)) / 6;
+      for (int ch = 0; ch < 3; ++ch)
+        escape[3 * k + ch] = static_cast<float>(std::clamp((1 - exact) / (1 - lat), 0.0, 1.0));
+    }
+    for (size_t i = 0; i < coeffs.ps.size(); ++i) coeffs.ps[i] *= escape[i];
+  }
+  Lattice lattice(cl, coeffs, lo);
   // The beam (power 1 per node's cross-section, travelling +z), delta-Eddington scaled like the
   // lattice: the forward fraction g of its scattering stays in the beam, so it attenuates with
   // sigma_t' = (1 - a g) sigma_t and scatters in layer k what enters it times
@@ -60,20 +137,46 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   for (int k = 0; k < r.layers; ++k) {
     double in = std::exp(-k * dtau_r / p.mu0);
     double s = in * albedo_r * -std::expm1(-dtau_r / p.mu0);
-    for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(s);
+    for (int c = 0; c < 3; ++c)
+      source[3 * k + c] = static_cast<float>(s) * (o.escape ? escape[3 * k + c] : 1.f);
   }
   lattice.set_source(source);
   Convergence c = lattice.converge(o.tolerance, o.max_steps, 64);
   r.steps = c.steps;
   r.converged = c.converged;
-  // Leaving per step: -z out of the first layer (reflected), +z out of the last (transmitted).
+  r.T_direct = std::exp(-p.tau / p.mu0);
+  // What leaves the lattice per step: -z out of the first layer, +z out of the last; what the
+  // scaled beam carries out beyond the unscattered part was scattered forward.
   std::vector<float> f = lattice.state();
   const size_t n = lattice.nodes();
   const int up = 4, down = 5;  // +z, -z
-  r.R_diffuse = f[(down * 3) * n + 0];
-  r.T_direct = std::exp(-p.tau / p.mu0);
-  // What the scaled beam carries out beyond the unscattered part was scattered forward.
-  r.T_diffuse = f[(up * 3) * n + (n - 1)] + std::exp(-r.layers * dtau_r / p.mu0) - r.T_direct;
+  r.R_lattice = f[(down * 3) * n + 0];
+  r.T_lattice = f[(up * 3) * n + (n - 1)] + std::exp(-r.layers * dtau_r / p.mu0) - r.T_direct;
+  // As the pipeline's view pass sees the medium: the single scattering exactly, the lattice's
+  // scattered power per layer (its second and later events) emitted isotropically and leaving
+  // each face with the transport's escape probability from a uniform layer,
+  //   (1 / 2 dtau) integral over the layer of E2(t) dt = (1 / 2) int_0^1 (mu / dtau)
+  //   (exp(-t0 / mu) - exp(-t1 / mu)) d mu.
+  SingleScattering single = slab_single_scattering(p);
+  r.R_single = single.R;
+  r.T_single = single.T;
+  std::vector<float> irr = lattice.irradiance();
+  const auto nodes = mu_nodes(400);
+  double R_multiple = 0, T_multiple = 0;
+  for (int k = 0; k < r.layers; ++k) {
+    double e = irr[3 * k];
+    if (!(e > 0)) continue;
+    double up_esc = 0, down_esc = 0;
+    double top0 = k * dtau, top1 = (k + 1) * dtau, bot0 = p.tau - top1, bot1 = p.tau - top0;
+    for (auto [mu, dmu] : nodes) {
+      up_esc += mu * (std::exp(-top0 / mu) - std::exp(-top1 / mu)) * dmu;
+      down_esc += mu * (std::exp(-bot0 / mu) - std::exp(-bot1 / mu)) * dmu;
+    }
+    R_multiple += e * up_esc / (2 * dtau);
+    T_multiple += e * down_esc / (2 * dtau);
+  }
+  r.R_diffuse = r.R_single + R_multiple;
+  r.T_diffuse = r.T_single + T_multiple;
   r.R = r.R_diffuse + r.R_specular;
   r.T = r.T_diffuse + r.T_direct;
   r.absorbed = 1 - r.R - r.T;
