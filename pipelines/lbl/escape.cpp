@@ -70,7 +70,7 @@ std::vector<float> escape_factor(const std::vector<float>& exact,
   for (size_t i = 0; i < m.size(); ++i) {
     double stay_lattice = 1 - double(lattice[i]);
     if (stay_lattice > 1e-6)
-      m[i] = static_cast<float>(std::clamp((1 - double(exact[i])) / stay_lattice, 0.0, 1.0));
+      m[i] = static_cast<float>(std::max(0.0, (1 - double(exact[i])) / stay_lattice));
   }
   return m;
 }

@@ -26,7 +26,10 @@ std::vector<float> exact_escape(gpu::ClContext& cl, const Volume& v, double g, i
 // P_lattice of the 6-direction lattice with collision chances `pt` (3 per node, open edges).
 std::vector<float> lattice_escape(const LatticeCoefficients& c);
 
-// m per node and channel from the two, in [0, 1] (1 where P_lattice is 1).
+// m per node and channel from the two, at least 0 (1 where P_lattice is 1). Deep inside it may
+// pass 1 a little: the lattice's axis-aligned escape, exp(-tau), beats isotropic emission's
+// E2-weighted one there, and m > 1 gives that light back (m (1 - P_lattice) = 1 - P < 1: no
+// node sends on more than it would keep).
 std::vector<float> escape_factor(const std::vector<float>& exact,
                                  const std::vector<float>& lattice);
 

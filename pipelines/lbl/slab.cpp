@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "core/errors.hpp"
+#include "pipelines/lbl/escape.hpp"
 #include "pipelines/lbl/lattice.hpp"
 
 namespace scatter::lbl {
@@ -30,6 +31,21 @@ std::vector<std::pair<double, double>> mu_nodes(int n) {
     nodes.push_back({u * u, 2 * u / n});
   }
   return nodes;
+}
+
+// The chances that isotropic emission spread evenly over layer k (of `layers`, each of optical
+// thickness d) leaves through the lit face (first) and the other (second) without another
+// interaction: (1 / 2 d) integral over the layer of E2(t) dt, with
+// int E2 = (1 / 2) int_0^1 mu (exp(-t0 / mu) - exp(-t1 / mu)) d mu.
+std::pair<double, double> layer_escape(int k, int layers, double d,
+                                       const std::vector<std::pair<double, double>>& nodes) {
+  double up = 0, down = 0;
+  double t0 = k * d, t1 = (k + 1) * d, b0 = (layers - 1 - k) * d, b1 = (layers - k) * d;
+  for (auto [mu, dmu] : nodes) {
+    up += mu * (std::exp(-t0 / mu) - std::exp(-t1 / mu)) * dmu;
+    down += mu * (std::exp(-b0 / mu) - std::exp(-b1 / mu)) * dmu;
+  }
+  return {up / (2 * d), down / (2 * d)};
 }
 
 }  // namespace
@@ -108,22 +124,19 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   // 1/6 down through the layers' (1 - pt); sideways packets never leave a periodic column).
   const auto esc_nodes = mu_nodes(400);
   const double dtau_s = (1 - p.albedo * p.g) * dtau;
-  std::vector<float> escape(3 * v.count(), 0.f);
+  std::vector<float> escape(3 * v.count(), 1.f);
   if (o.escape) {
     const double keep = 1 - coeffs.pt[0];
+    std::vector<float> exact(escape.size()), lattice(escape.size());
     for (int k = 0; k < r.layers; ++k) {
-      double up = 0, down = 0;
-      double t0 = k * dtau_s, t1 = (k + 1) * dtau_s, b0 = p.tau * (1 - p.albedo * p.g) - t1,
-             b1 = b0 + dtau_s;
-      for (auto [mu, dmu] : esc_nodes) {
-        up += mu * (std::exp(-t0 / mu) - std::exp(-t1 / mu)) * dmu;
-        down += mu * (std::exp(-b0 / mu) - std::exp(-b1 / mu)) * dmu;
+      auto [up, down] = layer_escape(k, r.layers, dtau_s, esc_nodes);
+      for (int ch = 0; ch < 3; ++ch) {
+        exact[3 * k + ch] = static_cast<float>(up + down);
+        lattice[3 * k + ch] =
+            static_cast<float>((std::pow(keep, k) + std::pow(keep, r.layers - 1 - k)) / 6);
       }
-      double exact = (up + down) / (2 * dtau_s);
-      double lat = (std::pow(keep, k) + std::pow(keep, r.layers - 1 - k)) / 6;
-      for (int ch = 0; ch < 3; ++ch)
-        escape[3 * k + ch] = static_cast<float>(std::clamp((1 - exact) / (1 - lat), 0.0, 1.0));
     }
+    escape = escape_factor(exact, lattice);
     for (size_t i = 0; i < coeffs.ps.size(); ++i) coeffs.ps[i] *= escape[i];
   }
   Lattice lattice(cl, coeffs, lo);
@@ -137,8 +150,7 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   for (int k = 0; k < r.layers; ++k) {
     double in = std::exp(-k * dtau_r / p.mu0);
     double s = in * albedo_r * -std::expm1(-dtau_r / p.mu0);
-    for (int c = 0; c < 3; ++c)
-      source[3 * k + c] = static_cast<float>(s) * (o.escape ? escape[3 * k + c] : 1.f);
+    for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(s) * escape[3 * k + c];
   }
   lattice.set_source(source);
   Convergence c = lattice.converge(o.tolerance, o.max_steps, 64);
@@ -154,29 +166,35 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   r.T_lattice = f[(up * 3) * n + (n - 1)] + std::exp(-r.layers * dtau_r / p.mu0) - r.T_direct;
   // As the pipeline's view pass sees the medium: the single scattering exactly, the lattice's
   // scattered power per layer (its second and later events) emitted isotropically and leaving
-  // each face with the transport's escape probability from a uniform layer,
-  //   (1 / 2 dtau) integral over the layer of E2(t) dt = (1 / 2) int_0^1 (mu / dtau)
-  //   (exp(-t0 / mu) - exp(-t1 / mu)) d mu.
-  SingleScattering single = slab_single_scattering(p);
+  // each face with the transport's escape probability from a uniform layer (layer_escape).
+  // scaled_view with g != 0: the whole slab as the delta-Eddington scaled problem (tau (1 - a g),
+  // albedo a (1 - g) / (1 - a g), isotropic), its forward peak left in the beam, which then
+  // carries the light scattered forward out of the far face.
+  SlabParams scaled = p;
+  if (o.scaled_view && p.g != 0) {
+    scaled.tau = p.tau * (1 - p.albedo * p.g);
+    scaled.albedo = albedo_r;
+    scaled.g = 0;
+  }
+  SingleScattering single = slab_single_scattering(scaled);
   r.R_single = single.R;
   r.T_single = single.T;
+  const double forward = std::exp(-scaled.tau / p.mu0) - r.T_direct;
   std::vector<float> irr = lattice.irradiance();
-  const auto nodes = mu_nodes(400);
+  // scaled_view: as the pipeline's setting, the lattice's light emitted and attenuated in the
+  // delta-Eddington scaled medium, (1 - g) irr through layers of dtau (1 - a g).
+  const double view_dtau = o.scaled_view ? dtau_s : dtau;
+  const double view_emit = o.scaled_view ? 1 - p.g : 1;
   double R_multiple = 0, T_multiple = 0;
   for (int k = 0; k < r.layers; ++k) {
-    double e = irr[3 * k];
+    double e = irr[3 * k] * view_emit;
     if (!(e > 0)) continue;
-    double up_esc = 0, down_esc = 0;
-    double top0 = k * dtau, top1 = (k + 1) * dtau, bot0 = p.tau - top1, bot1 = p.tau - top0;
-    for (auto [mu, dmu] : nodes) {
-      up_esc += mu * (std::exp(-top0 / mu) - std::exp(-top1 / mu)) * dmu;
-      down_esc += mu * (std::exp(-bot0 / mu) - std::exp(-bot1 / mu)) * dmu;
-    }
-    R_multiple += e * up_esc / (2 * dtau);
-    T_multiple += e * down_esc / (2 * dtau);
+    auto [e_up, e_down] = layer_escape(k, r.layers, view_dtau, esc_nodes);
+    R_multiple += e * e_up;
+    T_multiple += e * e_down;
   }
   r.R_diffuse = r.R_single + R_multiple;
-  r.T_diffuse = r.T_single + T_multiple;
+  r.T_diffuse = r.T_single + T_multiple + forward;
   r.R = r.R_diffuse + r.R_specular;
   r.T = r.T_diffuse + r.T_direct;
   r.absorbed = 1 - r.R - r.T;

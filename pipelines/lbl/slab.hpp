@@ -20,7 +20,8 @@ struct LblSlabOptions {
   double layer_tau = 0.1;  // optical thickness of a layer (at most; at least 32 layers)
   double tolerance = 1e-6;
   int max_steps = 400000;
-  bool escape = true;  // scale each layer's emission by the escape correction (lattice.hpp)
+  bool escape = true;       // scale each layer's emission by the escape correction (escape.hpp)
+  bool scaled_view = true;  // as the pipeline's setting of that name
 };
 
 // Fractions of the incident power.

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "../../test_util.hpp"
+#include "pipelines/reference/slab.hpp"
 #include "protocol/json_reader.hpp"
 
 namespace scatter::lbl {
@@ -45,6 +46,27 @@ TEST(LblSlab, TrendsFollowTransport) {
   EXPECT_GT(slab(2, 0.9).T, slab(8, 0.9).T);
   EXPECT_LT(slab(4, 0.9, 0.75).R, slab(4, 0.9, 0.0).R);
   EXPECT_GT(high.absorbed, 0);
+}
+
+// The single scattering by quadrature against the reference's Monte Carlo count of photons
+// leaving after one scattering, at normal and grazing incidence, isotropic and forward phase.
+TEST(LblSlab, SingleScatteringMatchesTheReference) {
+  for (auto [tau, albedo, g, mu0] : {std::array{4.0, 0.9, 0.0, 0.1},
+                                     {2.0, 0.99, 0.75, 0.1},
+                                     {1.0, 0.9, 0.75, 1.0},
+                                     {4.0, 0.9, 0.0, 1.0}}) {
+    SlabParams p;
+    p.tau = tau;
+    p.albedo = albedo;
+    p.g = g;
+    p.mu0 = mu0;
+    p.photons = 200000;
+    SlabResult ref = run_reference_slab(test::shared_gpu().cl(), p);
+    SingleScattering s = slab_single_scattering(p);
+    // The Monte Carlo counts' standard errors: sqrt(x (1 - x) / photons) <= 0.0012.
+    EXPECT_NEAR(s.R, ref.R_single, 0.005) << "tau " << tau << " g " << g << " mu0 " << mu0;
+    EXPECT_NEAR(s.T, ref.T_single, 0.005) << "tau " << tau << " g " << g << " mu0 " << mu0;
+  }
 }
 
 TEST(LblSlab, RejectsWhatTheLatticeDoesNotModel) {
