@@ -9,7 +9,8 @@
 // splatted trilinearly around the piece's midpoint; deposits from concurrent rays add through a
 // compare-and-swap loop (atomic_add_float). With an anisotropic phase (with_flow) the scattered
 // power summed over channels times the ray's unit direction is splatted the same way into `flow`
-// (3 floats per voxel): the view pass takes the single term's phase about its mean direction.
+// (3 floats per voxel): the view pass takes the single term's phase about its mean direction;
+// after those (flow + 3 N) the forward-scattered light's scattering (`extra`, RGB per voxel).
 
 // A ray record: origin (3), unit direction (3), power (3), unused (3).
 #define RAY_FLOATS 12
@@ -56,10 +57,11 @@ void deposit_piece(const Grid* g, __global const float* sigma_s, __global const 
   int v = 3 * voxel_index(g, c.x, c.y, c.z);
   float p[3] = {power->x, power->y, power->z}, q[3] = {scaled->x, scaled->y, scaled->z};
   float total = 0.0f;
+  __global float* extra = flow + 3 * g->nx * g->ny * g->nz;
   for (int ch = 0; ch < 3; ++ch) {
     float st = sigma_t[v + ch], ss = sigma_s[v + ch];
     if (st <= 0.0f) continue;
-    float keep = exp(-st * ds);
+    float keep = exp(-st * ds), p_in = p[ch];
     float scattered = p[ch] * (ss / st) * (1.0f - keep);
     if (scattered > 0.0f) splat(g, sigma_s, ch, mid, ch, scattered, deposit);
     total += fmax(scattered, 0.0f);
@@ -69,6 +71,12 @@ void deposit_piece(const Grid* g, __global const float* sigma_s, __global const 
     float keep_r = exp(-tr * ds);
     float scattered_r = tr > 0.0f ? q[ch] * (sr / tr) * (1.0f - keep_r) : 0.0f;
     if (scattered_r > 0.0f) splat(g, sigma_s, ch, mid, ch, scattered_r, source);
+    // What the scaled beam carries beyond the real one is light scattered forward; its
+    // scattering here (sigma_s x its path in the piece) is a multiple-term emission.
+    if (with_flow && tr > 0.0f) {
+      float fwd = ss * (q[ch] * (1.0f - keep_r) / tr - p_in * (1.0f - keep) / st);
+      if (fwd > 0.0f) splat(g, sigma_s, ch, mid, ch, fwd, extra);
+    }
     q[ch] *= keep_r;
   }
   if (with_flow && total > 0.0f) {

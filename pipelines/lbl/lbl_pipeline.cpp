@@ -79,7 +79,8 @@ struct State {
   std::unique_ptr<Lattice> lattice;
   cl::Buffer deposit;  // single scattering of the light rays (the single term)
   cl::Buffer source;   // the lattice's source: the deposit, or with g != 0 the scaled beam's
-  cl::Buffer flow;     // with g != 0: the deposit's direction, summed over channels (view phase)
+  cl::Buffer flow;     // with g != 0: the deposit's direction summed over channels (3 per voxel,
+                       // the view's phase), then the forward-scattered light's scattering (3)
   double max_sigma_s = 0;
   bool diffused = false;  // the lattice has converged for the loaded deposit and settings
 };
@@ -239,7 +240,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
                                                     3 * next->volume.count() * sizeof(float));
     next->flow = scene.medium.g == 0 ? next->deposit
                                      : cl::Buffer(cl.context(), CL_MEM_READ_WRITE,
-                                                  3 * next->volume.count() * sizeof(float));
+                                                  6 * next->volume.count() * sizeof(float));
     next->material = material_key(scene, s);
     next->density = scene.medium.density;
     state_ = std::move(next);
@@ -261,8 +262,9 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     cl::Buffer ray_buf = upload(cl, rays.rays);
     const bool with_flow = scene.medium.g != 0;
     cl::Buffer* flow = with_flow ? &st.flow : nullptr;
-    for (cl::Buffer* b : {&st.deposit, &st.source, &st.flow})
+    for (cl::Buffer* b : {&st.deposit, &st.source})
       queue.enqueueFillBuffer(*b, 0.f, 0, 3 * st.volume.count() * sizeof(float));
+    if (with_flow) queue.enqueueFillBuffer(st.flow, 0.f, 0, 6 * st.volume.count() * sizeof(float));
     if (s.interleave > 0 && d.diffuse) {
       if (!s.warm) st.lattice->clear();
       int per_round = std::max(1, static_cast<int>(std::lround(s.interleave * s.step)));
@@ -318,7 +320,8 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   const lbl::ClVolume& v = st.device;
   gpu::set_args(k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_t, v.n, v.grad, st.deposit,
                 st.lattice->irradiance_buffer(), w_single, w_multiple, st.flow,
-                float(scene.medium.g), scene.medium.g != 0 ? 1 : 0, camera, w, h, d.bend ? 1 : 0,
+                float(scene.medium.g), scene.medium.g != 0 ? 1 : 0, v.sigma_s,
+                float(s.scaled_view ? scene.medium.g : 0.0), camera, w, h, d.bend ? 1 : 0,
                 float(s.step * st.volume.voxel), out);
   queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
   queue.finish();
