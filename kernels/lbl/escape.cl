@@ -1,7 +1,7 @@
 // The escape correction's exact part (pipelines/lbl/escape): per voxel, the chance that light
 // emitted isotropically at its centre leaves the grid without another interaction, the mean of
 // exp(-tau) over `count` directions (tau through the delta-Eddington scaled sigma_t', RGB; exact
-// voxel crossings). Voxels that do not scatter get 1 (nothing is emitted there).
+// voxel crossings, a ray stopped once all channels pass tau 6). Voxels that do not scatter get 1.
 __kernel void escape_exact(float3 origin, float voxel, int nx, int ny, int nz,
                            __global const float* sigma_t, __global const float* sigma_s,
                            __global const float* dirs, int count, __global float* out) {
@@ -24,7 +24,7 @@ __kernel void escape_exact(float3 origin, float voxel, int nx, int ny, int nz,
       dda_init(&s, o, d, g.origin, g.voxel, (int3)(nx, ny, nz), t0, t1);
       float a, b;
       int3 q;
-      while (dda_next(&s, &a, &b, &q) && fmin(tau.x, fmin(tau.y, tau.z)) < 10.0f) {
+      while (dda_next(&s, &a, &b, &q) && fmin(tau.x, fmin(tau.y, tau.z)) < 6.0f) {
         int w = 3 * voxel_index(&g, q.x, q.y, q.z);
         tau += (b - a) * (float3)(sigma_t[w], sigma_t[w + 1], sigma_t[w + 2]);
       }

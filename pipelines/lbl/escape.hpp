@@ -5,7 +5,7 @@
 // reads as the multiple term's emission, comes out too high (a slab at normal incidence: 1.5x
 // in the reflected multiple term). Each node's emission (what it scatters and the source) is
 // scaled by m = (1 - P) / (1 - P_lattice), where P is the chance that isotropic emission at the
-// node leaves the medium without another interaction (exact, over 64 directions, through the
+// node leaves the medium without another interaction (exact, over 32 directions, through the
 // delta-Eddington scaled sigma_t') and P_lattice the lattice's own (1/6 of the product of
 // (1 - pt) along each axis to the grid's edge): the light carried on is what would interact
 // again, so the lattice's collision density drops near surfaces to about the transport's. The
@@ -21,7 +21,7 @@
 namespace scatter::lbl {
 
 // P per voxel and channel (3 floats per voxel; 1 where nothing scatters), on the device.
-std::vector<float> exact_escape(gpu::ClContext& cl, const Volume& v, double g, int directions = 64);
+std::vector<float> exact_escape(gpu::ClContext& cl, const Volume& v, double g, int directions = 32);
 
 // P_lattice of the 6-direction lattice with collision chances `pt` (3 per node, open edges).
 std::vector<float> lattice_escape(const LatticeCoefficients& c);

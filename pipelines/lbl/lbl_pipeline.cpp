@@ -146,11 +146,13 @@ StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
 
 Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Decision& d) {
   Plan p{"lbl", terms, {}};
-  p.stages.push_back({"volume", d.material,
-                      d.material ? std::to_string(scene.voxels) +
-                                       " voxels on the long side; n, grad n smoothed over " +
-                                       short_number(s.smooth) + " voxels"
-                                 : "material unchanged: volume kept"});
+  p.stages.push_back(
+      {"volume", d.material,
+       d.material
+           ? std::to_string(scene.voxels) + " voxels on the long side; n, grad n smoothed over " +
+                 short_number(s.smooth) + " voxels" +
+                 (s.escape && s.directions == 6 ? "; escape correction over 32 directions" : "")
+           : "material unchanged: volume kept"});
   std::string path = d.bend ? "bent by the ray equation, step " + short_number(s.step) + " voxels"
                             : "constant n: straight rays, exact voxel crossings (no gradient)";
   p.stages.push_back({"march", d.march,
@@ -166,8 +168,11 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
   std::string gathers =
       d.single && d.multiple ? "deposit + lattice" : (d.single ? "the deposit" : "the lattice");
   std::string phase = scene.medium.g != 0
-                          ? "; phase taken isotropic (g " + short_number(scene.medium.g) +
-                                " enters the lattice and its source delta-Eddington scaled)"
+                          ? "; HG phase (g " + short_number(scene.medium.g) +
+                                ") about the light's direction for the single term and the "
+                                "forward-scattered light, the lattice's (delta-Eddington "
+                                "scaled) light isotropic" +
+                                (s.scaled_view ? " and seen through the scaled medium" : "")
                           : "";
   p.stages.push_back(
       {"view", true,
