@@ -1,5 +1,6 @@
 // The escape correction's exact part (pipelines/lbl/escape): per voxel, the chance that light
-// emitted isotropically at its centre leaves the grid without another interaction, the mean of
+// emitted isotropically at its centre leaves the grid without another interaction (its own
+// voxel's depth weighted: see below), the mean of
 // exp(-tau) over `count` directions (tau through the delta-Eddington scaled sigma_t', RGB; exact
 // voxel crossings, a ray stopped once all channels pass tau 6). Voxels that do not scatter get 1.
 __kernel void escape_exact(float3 origin, float voxel, int nx, int ny, int nz,
@@ -26,7 +27,12 @@ __kernel void escape_exact(float3 origin, float voxel, int nx, int ny, int nz,
       int3 q;
       while (dda_next(&s, &a, &b, &q) && fmin(tau.x, fmin(tau.y, tau.z)) < 6.0f) {
         int w = 3 * voxel_index(&g, q.x, q.y, q.z);
-        tau += (b - a) * (float3)(sigma_t[w], sigma_t[w + 1], sigma_t[w + 2]);
+        float3 st = (float3)(sigma_t[w], sigma_t[w + 1], sigma_t[w + 2]);
+        // The lattice sends a node's emission to its neighbours whole: its own voxel's depth
+        // counts times exp(-sigma_t' dx), all of it when the voxel is thin, none when it is
+        // dense (whose own depth would make P far below the lattice's, and m amplify).
+        if (q.x == c.x && q.y == c.y && q.z == c.z) st *= exp(-st * voxel);
+        tau += (b - a) * st;
       }
     }
     sum += exp(-tau);

@@ -22,7 +22,8 @@ Volume filled(float sigma_s, float sigma_t) {
 }
 
 // The kernel against the same mean over the same 64 Fibonacci directions on the CPU: in a
-// homogeneous box the optical depth to the edge is sigma_t' times the distance to the box.
+// homogeneous box the optical depth to the edge is sigma_t' times the distance to the box, the
+// part inside the own voxel weighted by exp(-sigma_t' dx).
 TEST(LblEscape, ExactEscapeMatchesACpuComputation) {
   const float ss = 2, st = 2.5;
   const double g = 0.5;
@@ -35,10 +36,13 @@ TEST(LblEscape, ExactEscapeMatchesACpuComputation) {
     for (int k = 0; k < 64; ++k) {
       double z = 1 - (k + 0.5) * 2 / 64, r = std::sqrt(1 - z * z);
       Vec3 d{r * std::cos(golden * k), r * std::sin(golden * k), z};
-      double t = 1e30;
+      double t = 1e30, own = 1e30;  // to the box's face, and to the own voxel's
       for (int a = 0; a < 3; ++a)
-        if (std::abs(d[a]) > 1e-12) t = std::min(t, ((d[a] > 0 ? 0.8 : -0.8) - o[a]) / d[a]);
-      mean += std::exp(-sts * t) / 64;
+        if (std::abs(d[a]) > 1e-12) {
+          t = std::min(t, ((d[a] > 0 ? 0.8 : -0.8) - o[a]) / d[a]);
+          own = std::min(own, 0.5 * v.voxel / std::abs(d[a]));
+        }
+      mean += std::exp(-sts * (t - own) - sts * std::exp(-sts * v.voxel) * own) / 64;
     }
     EXPECT_NEAR(p[3 * v.index(i, 8, 7)], mean, 1e-4 + 1e-3 * mean) << "i " << i;
   }
