@@ -11,13 +11,22 @@
 #  interleave marching and diffusion in rounds of k steps (Table I) against in sequence (k 0), 64^3
 #  bandwidth the lattice step's GB/s against a STREAM-like copy in the same run (64^3, 128^3)
 #  frames   light change against camera-only change at 512 x 512 in a live session
+#  targets  issue 16's targets: all and single terms at 64 voxels, 64 x 64, on the four shipped
+#           scenes and the sphere at g 0.7 and 0.9, against references rendered once and kept
+#           (bench/out/ref-NAME.exr: 2048 spp, 8192 at g 0.7 and 0.9; ref-NAME.single.exr):
+#           bench/out/lbl-targets.csv (SET="k=v ..." adds lbl settings)
+#  slab-targets  the slab at tau 2-8, albedo 0.9 and 0.99, g 0 and 0.75, mu0 1 and 0.1, relative
+#           differences: bench/out/lbl-targets-slab.csv
 # Usage: bench/lbl.sh [SCATTERD] [PARTS...]
-#   (parts: slab images albedo interleave bandwidth frames; default all)
+#   (parts: slab images albedo interleave bandwidth frames targets slab-targets; default the
+#   first six)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 S=${1:-build/scatterd}
 shift || true
 parts=${*:-slab images albedo interleave bandwidth frames}
+sets=()
+for kv in ${SET:-}; do sets+=(--set "$kv"); done
 out=bench/out
 mkdir -p "$out"
 has() { [[ " $parts " == *" $1 "* ]]; }
@@ -101,4 +110,47 @@ if has frames; then
   sleep 1
   node --experimental-websocket bench/lbl-frames.mjs ws://127.0.0.1:$port/api/ws 6 sphere all 2>/dev/null |
     tee "$out/lbl-frames.txt"
+fi
+
+if has targets; then
+  # name:scene:g (empty g: the scene's own) and the references' samples per pixel.
+  cases="sphere:sphere: cube-torus:cube-torus: layers:layers: bunny:bunny: sphere-g0.7:sphere:0.7
+         sphere-g0.9:sphere:0.9"
+  echo "name,terms,rel_rmse,reference_noise,frame_ms,stages" > "$out/lbl-targets.csv"
+  for c in $cases; do
+    IFS=: read -r name scene g <<< "$c"
+    json="$out/lbl-target-$name.json"
+    jq --arg g "$g" '.voxels = 64 | if $g != "" then .medium.g = ($g | tonumber) else . end' \
+      scenes/$scene.json > "$json"
+    spp=2048
+    [ -n "$g" ] && spp=8192
+    for terms in single all; do
+      ref="$out/ref-$name.exr"
+      [ $terms = single ] && ref="$out/ref-$name.single.exr"
+      nice -n 5 $S bench "$json" --pipeline lbl --terms $terms --width 64 --height 64 --frames 1 \
+        --reference "$ref" --reference-spp $spp --sweep warm=1 "${sets[@]}" \
+        --csv "$out/lbl-target-$name-$terms.csv" > /dev/null
+      tail -n 1 "$out/lbl-target-$name-$terms.csv" | awk -F, -v n=$name -v t=$terms \
+        '{ print n "," t "," $11 "," $12 "," $9 "," $13 }' >> "$out/lbl-targets.csv"
+    done
+  done
+  column -s, -t "$out/lbl-targets.csv"
+fi
+
+if has slab-targets; then
+  echo "tau,albedo,g,mu0,R_ref,R_lbl,R_rel,T_ref,T_lbl,T_rel" > "$out/lbl-targets-slab.csv"
+  for mu0 in 1 0.1; do
+    for g in 0 0.75; do
+      for tau in 2 4 8; do
+        for a in 0.9 0.99; do
+          ref=$($S slab --tau $tau --albedo $a --g $g --mu0 $mu0 --solver reference --photons 400000 --json)
+          lbl=$($S slab --tau $tau --albedo $a --g $g --mu0 $mu0 --solver lbl --json)
+          jq -rn --argjson r "$ref" --argjson l "$lbl" --arg tau $tau --arg a $a --arg g $g --arg m $mu0 \
+            '[$tau, $a, $g, $m, $r.R, $l.R, ($l.R / $r.R - 1), $r.T, $l.T, ($l.T / $r.T - 1)] | @csv' \
+            >> "$out/lbl-targets-slab.csv"
+        done
+      done
+    done
+  done
+  column -s, -t "$out/lbl-targets-slab.csv"
 fi

@@ -173,6 +173,12 @@ __kernel void lattice_interfaces(int nx, int ny, int nz, __global const float* f
 }
 #endif
 
+// x[i] *= f[i]: the source times the nodes' emission factors (pipelines/lbl/escape.hpp).
+__kernel void scale_by(__global float* x, __global const float* f) {
+  size_t i = get_global_id(0);
+  x[i] *= f[i];
+}
+
 // Partial sums of `count` floats: work item i adds elements i, i + items, ... (for the total
 // energy; the host adds the partials in double).
 __kernel void partial_sums(__global const float* data, ulong count, __global float* partial) {

@@ -7,27 +7,42 @@
 // Straight rays (constant n) cross the voxels exactly (DDA); bent rays take fixed steps of the
 // ray equation (coefficients of the voxel holding the step's midpoint). The scattered power is
 // splatted trilinearly around the piece's midpoint; deposits from concurrent rays add through a
-// compare-and-swap loop (atomic_add_float).
+// compare-and-swap loop (atomic_add_float). With an anisotropic phase (with_flow) the scattered
+// power summed over channels times the ray's unit direction is splatted the same way into `flow`
+// (3 floats per voxel): the view pass takes the single term's phase about its mean direction;
+// after those (flow + 3 N) the forward-scattered light's scattering (`extra`, RGB per voxel).
 
 // A ray record: origin (3), unit direction (3), power (3), unused (3).
 #define RAY_FLOATS 12
 
 // Adds `amount` at p spread over the 8 voxels around it with trilinear weights (centres clamped
-// to the grid, so nothing is lost at its edges): a regular lattice of rays then deposits evenly
-// instead of beating against the voxel lattice.
-void splat(const Grid* g, float3 p, int ch, float amount, __global float* deposit) {
+// to the grid), kept only on the voxels that scatter in channel `mask_ch` (any channel when -1)
+// and renormalised over them: a regular lattice of rays then deposits evenly instead of beating
+// against the voxel lattice, and nothing lands in the empty voxels outside the surface (which
+// the view pass would see glow). The voxel the piece lies in always scatters, so the sum is > 0.
+void splat(const Grid* g, __global const float* sigma_s, int mask_ch, float3 p, int ch,
+           float amount, __global float* deposit) {
   float3 q = clamp((p - g->origin) / g->voxel - 0.5f, (float3)(0.0f),
                    (float3)(g->nx - 1, g->ny - 1, g->nz - 1));
   int3 c0 = convert_int3(floor(q));
   int3 c1 = min(c0 + 1, (int3)(g->nx - 1, g->ny - 1, g->nz - 1));
   float3 f = q - convert_float3(c0);
+  float w[8], total = 0.0f;
+  int idx[8];
   for (int corner = 0; corner < 8; ++corner) {
-    float w = ((corner & 1) ? f.x : 1.0f - f.x) * ((corner & 2) ? f.y : 1.0f - f.y) *
-              ((corner & 4) ? f.z : 1.0f - f.z);
-    if (w <= 0.0f) continue;
     int3 c = (int3)((corner & 1) ? c1.x : c0.x, (corner & 2) ? c1.y : c0.y, (corner & 4) ? c1.z : c0.z);
-    atomic_add_float(deposit + 3 * voxel_index(g, c.x, c.y, c.z) + ch, w * amount);
+    idx[corner] = voxel_index(g, c.x, c.y, c.z);
+    int v = 3 * idx[corner];
+    bool scatters = mask_ch < 0 ? (sigma_s[v] > 0.0f || sigma_s[v + 1] > 0.0f || sigma_s[v + 2] > 0.0f)
+                                : sigma_s[v + mask_ch] > 0.0f;
+    w[corner] = scatters ? ((corner & 1) ? f.x : 1.0f - f.x) * ((corner & 2) ? f.y : 1.0f - f.y) *
+                               ((corner & 4) ? f.z : 1.0f - f.z)
+                         : 0.0f;
+    total += w[corner];
   }
+  if (!(total > 0.0f)) return;
+  for (int corner = 0; corner < 8; ++corner)
+    if (w[corner] > 0.0f) atomic_add_float(deposit + 3 * idx[corner] + ch, w[corner] / total * amount);
 }
 
 // Beer-Lambert over a piece of length ds in voxel c; the scattered power is splatted at `mid`.
@@ -36,23 +51,37 @@ void splat(const Grid* g, float3 p, int ch, float amount, __global float* deposi
 // coefficients are scaled, and what it scatters goes to `source`; `deposit` keeps the real
 // single scattering for the view pass.
 void deposit_piece(const Grid* g, __global const float* sigma_s, __global const float* sigma_t,
-                   float g_phase, int3 c, float3 mid, float ds, float3* power, float3* scaled,
-                   __global float* deposit, __global float* source) {
+                   float g_phase, int3 c, float3 mid, float3 dir, float ds, float3* power,
+                   float3* scaled, __global float* deposit, __global float* source,
+                   __global float* flow, int with_flow) {
   int v = 3 * voxel_index(g, c.x, c.y, c.z);
   float p[3] = {power->x, power->y, power->z}, q[3] = {scaled->x, scaled->y, scaled->z};
+  float total = 0.0f;
+  __global float* extra = flow + 3 * g->nx * g->ny * g->nz;
   for (int ch = 0; ch < 3; ++ch) {
     float st = sigma_t[v + ch], ss = sigma_s[v + ch];
     if (st <= 0.0f) continue;
-    float keep = exp(-st * ds);
+    float keep = exp(-st * ds), p_in = p[ch];
     float scattered = p[ch] * (ss / st) * (1.0f - keep);
-    if (scattered > 0.0f) splat(g, mid, ch, scattered, deposit);
+    if (scattered > 0.0f) splat(g, sigma_s, ch, mid, ch, scattered, deposit);
+    total += fmax(scattered, 0.0f);
     p[ch] *= keep;
     if (g_phase == 0.0f) continue;
     float sr = (1.0f - g_phase) * ss, tr = st - g_phase * ss;
     float keep_r = exp(-tr * ds);
     float scattered_r = tr > 0.0f ? q[ch] * (sr / tr) * (1.0f - keep_r) : 0.0f;
-    if (scattered_r > 0.0f) splat(g, mid, ch, scattered_r, source);
+    if (scattered_r > 0.0f) splat(g, sigma_s, ch, mid, ch, scattered_r, source);
+    // What the scaled beam carries beyond the real one is light scattered forward; its
+    // scattering here (sigma_s x its path in the piece) is a multiple-term emission.
+    if (with_flow && tr > 0.0f) {
+      float fwd = ss * (q[ch] * (1.0f - keep_r) / tr - p_in * (1.0f - keep) / st);
+      if (fwd > 0.0f) splat(g, sigma_s, ch, mid, ch, fwd, extra);
+    }
     q[ch] *= keep_r;
+  }
+  if (with_flow && total > 0.0f) {
+    float d[3] = {dir.x, dir.y, dir.z};
+    for (int k = 0; k < 3; ++k) splat(g, sigma_s, -1, mid, k, total * d[k], flow);
   }
   *power = (float3)(p[0], p[1], p[2]);
   *scaled = g_phase == 0.0f ? *power : (float3)(q[0], q[1], q[2]);
@@ -63,7 +92,7 @@ __kernel void march_rays(float3 origin, float voxel, int nx, int ny, int nz,
                          __global const float* n_field, __global const float* grad_field,
                          __global const float* rays, int ray_count, int bend, float delta,
                          float cutoff, float g_phase, __global float* deposit,
-                         __global float* source) {
+                         __global float* source, __global float* flow, int with_flow) {
   int r = get_global_id(0);
   if (r >= ray_count) return;
   Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
@@ -80,8 +109,8 @@ __kernel void march_rays(float3 origin, float voxel, int nx, int ny, int nz,
     float a, b;
     int3 c;
     while (dda_next(&s, &a, &b, &c) && fmax(scaled.x, fmax(scaled.y, scaled.z)) > stop)
-      deposit_piece(&g, sigma_s, sigma_t, g_phase, c, o + d * (0.5f * (a + b)), b - a, &power,
-                    &scaled, deposit, source);
+      deposit_piece(&g, sigma_s, sigma_t, g_phase, c, o + d * (0.5f * (a + b)), d, b - a, &power,
+                    &scaled, deposit, source, flow, with_flow);
     return;
   }
   float3 x = o + d * t0;
@@ -94,8 +123,8 @@ __kernel void march_rays(float3 origin, float voxel, int nx, int ny, int nz,
     float ds = eikonal_step(&g, n_field, grad_field, delta, &x, &v);
     int3 c = voxel_of(&g, 0.5f * (x0 + x));
     if (!inside_grid(&g, c)) break;
-    deposit_piece(&g, sigma_s, sigma_t, g_phase, c, 0.5f * (x0 + x), ds, &power, &scaled, deposit,
-                  source);
+    deposit_piece(&g, sigma_s, sigma_t, g_phase, c, 0.5f * (x0 + x), normalize(x - x0), ds, &power,
+                  &scaled, deposit, source, flow, with_flow);
   }
 }
 
@@ -154,7 +183,7 @@ __kernel void march_round(float3 origin, float voxel, int nx, int ny, int nz,
                           __global const float* n_field, __global const float* grad_field,
                           int ray_count, int bend, float delta, int k, float g_phase,
                           __global float* state, __global float* deposit, __global float* source,
-                          volatile __global int* alive_count) {
+                          __global float* flow, int with_flow, volatile __global int* alive_count) {
   int r = get_global_id(0);
   if (r >= ray_count) return;
   __global float* s = state + STATE_FLOATS * r;
@@ -178,8 +207,8 @@ __kernel void march_round(float3 origin, float voxel, int nx, int ny, int nz,
       alive = false;
       break;
     }
-    deposit_piece(&g, sigma_s, sigma_t, g_phase, c, 0.5f * (x0 + x), ds, &power, &scaled, deposit,
-                  source);
+    deposit_piece(&g, sigma_s, sigma_t, g_phase, c, 0.5f * (x0 + x), normalize(x - x0), ds, &power,
+                  &scaled, deposit, source, flow, with_flow);
     alive = fmax(scaled.x, fmax(scaled.y, scaled.z)) > stop;
   }
   float out[13] = {x.x, x.y, x.z, v.x, v.y, v.z, power.x, power.y, power.z,

@@ -7,7 +7,7 @@ namespace scatter::lbl {
 InterleaveResult march_interleaved(gpu::ClContext& cl, const ClVolume& v, const cl::Buffer& rays,
                                    int count, bool bend, double step, double cutoff, double g,
                                    cl::Buffer& deposit, cl::Buffer& source, Lattice& lattice, int k,
-                                   int lattice_steps) {
+                                   int lattice_steps, cl::Buffer* flow) {
   InterleaveResult r;
   if (count == 0) return r;
   auto& queue = cl.queue();
@@ -19,7 +19,8 @@ InterleaveResult march_interleaved(gpu::ClContext& cl, const ClVolume& v, const 
   gpu::set_args(start, v.origin, v.voxel, v.nx, v.ny, v.nz, v.n, rays, count, float(cutoff), state);
   queue.enqueueNDRangeKernel(start, cl::NullRange, cl::NDRange(size_t(count)));
   gpu::set_args(round, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_s, v.sigma_t, v.n, v.grad,
-                count, bend ? 1 : 0, float(step), k, float(g), state, deposit, source, alive);
+                count, bend ? 1 : 0, float(step), k, float(g), state, deposit, source,
+                flow ? *flow : deposit, flow ? 1 : 0, alive);
   // A ray crosses the grid's diagonal in at most this many rounds (bent ones a few times more).
   const int bound = static_cast<int>(4.0 * (v.nx + v.ny + v.nz) * v.voxel / step / k) + 8;
   cl_int live = 1;

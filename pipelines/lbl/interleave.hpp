@@ -19,6 +19,6 @@ struct InterleaveResult {
 InterleaveResult march_interleaved(gpu::ClContext& cl, const ClVolume& v, const cl::Buffer& rays,
                                    int count, bool bend, double step, double cutoff, double g,
                                    cl::Buffer& deposit, cl::Buffer& source, Lattice& lattice, int k,
-                                   int lattice_steps);
+                                   int lattice_steps, cl::Buffer* flow = nullptr);
 
 }  // namespace scatter::lbl

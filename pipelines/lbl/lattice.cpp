@@ -37,15 +37,27 @@ Lattice::Lattice(gpu::ClContext& cl, const LatticeCoefficients& c, LatticeOption
     throw std::invalid_argument("lattice directions must be 6 or 18");
   if (o_.directions == 18 && o_.blocked)
     throw std::invalid_argument("the 18-direction lattice has no blocked form");
+  if (!c.emit.empty() && c.emit.size() != c.pt.size())
+    throw std::invalid_argument("the lattice's emission factors must hold 3 floats per node");
+  // The emission factor scales what a node scatters on (ps) and, in set_source, its source.
+  auto emitted = [&](const std::vector<float>& ps) {
+    std::vector<float> out = ps;
+    for (size_t i = 0; i < c.emit.size(); ++i) out[i] *= c.emit[i];
+    return out;
+  };
   pt_ = upload(cl, c.pt);
-  ps_ = upload(cl, c.ps);
+  ps_ = upload(cl, emitted(c.ps));
   w_ = upload(cl, c.w);
+  if (!c.emit.empty()) {
+    emit_ = c.emit;
+    emit_buf_ = upload(cl, c.emit);
+  }
   if (o_.directions == 18) {
     if (c.pt_diag.size() != c.pt.size() || c.ps_diag.size() != c.pt.size() ||
         c.w_diag.size() != c.pt.size())
       throw std::invalid_argument("the 18-direction lattice needs the diagonal coefficients");
     pt_d_ = upload(cl, c.pt_diag);
-    ps_d_ = upload(cl, c.ps_diag);
+    ps_d_ = upload(cl, emitted(c.ps_diag));
     w_d_ = upload(cl, c.w_diag);
   }
   src_ = device_buffer(cl, 3 * n_);
@@ -81,12 +93,18 @@ void Lattice::clear() {
 
 void Lattice::set_source(const cl::Buffer& deposit) {
   cl_.queue().enqueueCopyBuffer(deposit, src_, 0, 0, 3 * n_ * sizeof(float));
+  if (emit_.empty()) return;
+  cl::Kernel k(cl_.program({"kernels/lbl/lattice.cl"}), "scale_by");
+  gpu::set_args(k, src_, emit_buf_);
+  cl_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(3 * n_));
 }
 
 void Lattice::set_source(const std::vector<float>& deposit) {
   if (deposit.size() != 3 * n_)
     throw std::invalid_argument("lattice source must hold 3 floats per node");
-  cl_.queue().enqueueWriteBuffer(src_, CL_TRUE, 0, deposit.size() * sizeof(float), deposit.data());
+  std::vector<float> src = deposit;
+  for (size_t i = 0; i < emit_.size(); ++i) src[i] *= emit_[i];
+  cl_.queue().enqueueWriteBuffer(src_, CL_TRUE, 0, src.size() * sizeof(float), src.data());
 }
 
 void Lattice::set_state(const std::vector<float>& f) {

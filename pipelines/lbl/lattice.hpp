@@ -37,7 +37,8 @@ class Lattice {
 
   // Zeroes the state (f and interfaces); the source stays.
   void clear();
-  // The power deposited per node per step (3 floats per node, same layout as the volume).
+  // The power deposited per node per step (3 floats per node, same layout as the volume),
+  // times the coefficients' emission factors when they have them.
   void set_source(const cl::Buffer& deposit);
   void set_source(const std::vector<float>& deposit);
   // f as 3 x directions floats per node: f[(d * 3 + ch) * N + node], d = +x, -x, +y, -y, +z,
@@ -76,7 +77,8 @@ class Lattice {
   int nx_, ny_, nz_;
   size_t n_;
   size_t floats() const { return 3 * size_t(o_.directions) * n_; }  // of f
-  cl::Buffer pt_, ps_, w_, pt_d_, ps_d_, w_d_, src_, irr_, partial_;
+  cl::Buffer pt_, ps_, w_, pt_d_, ps_d_, w_d_, src_, irr_, partial_, emit_buf_;
+  std::vector<float> emit_;  // the coefficients' emission factors (empty: none)
   cl::Buffer f_[2], iface_[2];
   int cur_ = 0;  // f_[cur_] and iface_[cur_] hold the current state
   cl::Kernel step_kernel_, sum_kernel_;

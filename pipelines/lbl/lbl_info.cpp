@@ -23,6 +23,12 @@ const SettingsTable<LblSettings>& lbl_settings() {
        one_of(setting("directions", &S::directions, 6, 18, kept("material"),
                       "6 (the paper's lattice) or 18 (Geist et al.'s, global form only)"),
               {6, 18}),
+       flag("escape", &S::escape, kept("material"),
+            "1: scale each node's emission by the escape correction, a Marshak-type boundary "
+            "(6 directions; docs/pipelines/lbl.md); 0: the open lattice alone"),
+       flag("scaled_view", &S::scaled_view, frame(),
+            "1: the view pass gathers the multiple term through the delta-Eddington scaled medium "
+            "(sigma_s', sigma_t'), as the lattice carries it; 0: through the real one"),
        setting("tolerance", &S::tolerance, 1e-6, 0.5, kept("diffusion"),
                "relative change per check that ends the diffusion"),
        setting("max_steps", &S::max_steps, 1, 1000000, kept("diffusion"),

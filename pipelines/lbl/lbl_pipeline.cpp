@@ -8,6 +8,7 @@
 #include "pipelines/common/cl_library.hpp"
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/common/stage_clock.hpp"
+#include "pipelines/lbl/escape.hpp"
 #include "pipelines/lbl/interleave.hpp"
 #include "pipelines/lbl/light_rays.hpp"
 
@@ -78,6 +79,8 @@ struct State {
   std::unique_ptr<Lattice> lattice;
   cl::Buffer deposit;  // single scattering of the light rays (the single term)
   cl::Buffer source;   // the lattice's source: the deposit, or with g != 0 the scaled beam's
+  cl::Buffer flow;     // with g != 0: the deposit's direction summed over channels (3 per voxel,
+                       // the view's phase), then the forward-scattered light's scattering (3)
   double max_sigma_s = 0;
   bool diffused = false;  // the lattice has converged for the loaded deposit and settings
 };
@@ -143,11 +146,13 @@ StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
 
 Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Decision& d) {
   Plan p{"lbl", terms, {}};
-  p.stages.push_back({"volume", d.material,
-                      d.material ? std::to_string(scene.voxels) +
-                                       " voxels on the long side; n, grad n smoothed over " +
-                                       short_number(s.smooth) + " voxels"
-                                 : "material unchanged: volume kept"});
+  p.stages.push_back(
+      {"volume", d.material,
+       d.material
+           ? std::to_string(scene.voxels) + " voxels on the long side; n, grad n smoothed over " +
+                 short_number(s.smooth) + " voxels" +
+                 (s.escape && s.directions == 6 ? "; escape correction over 32 directions" : "")
+           : "material unchanged: volume kept"});
   std::string path = d.bend ? "bent by the ray equation, step " + short_number(s.step) + " voxels"
                             : "constant n: straight rays, exact voxel crossings (no gradient)";
   p.stages.push_back({"march", d.march,
@@ -163,8 +168,11 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
   std::string gathers =
       d.single && d.multiple ? "deposit + lattice" : (d.single ? "the deposit" : "the lattice");
   std::string phase = scene.medium.g != 0
-                          ? "; phase taken isotropic (g " + short_number(scene.medium.g) +
-                                " enters the lattice and its source delta-Eddington scaled)"
+                          ? "; HG phase (g " + short_number(scene.medium.g) +
+                                ") about the light's direction for the single term and the "
+                                "forward-scattered light, the lattice's (delta-Eddington "
+                                "scaled) light isotropic" +
+                                (s.scaled_view ? " and seen through the scaled medium" : "")
                           : "";
   p.stages.push_back(
       {"view", true,
@@ -225,13 +233,19 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     for (float x : next->volume.sigma_s) next->max_sigma_s = std::max<double>(next->max_sigma_s, x);
     lbl::LatticeOptions o{
         .blocked = s.blocked, .block = s.block, .inner = s.inner, .directions = s.directions};
-    next->lattice = std::make_unique<lbl::Lattice>(
-        cl, lbl::lattice_coefficients(next->volume, scene.medium.g), o);
+    lbl::LatticeCoefficients coefficients = lbl::lattice_coefficients(next->volume, scene.medium.g);
+    if (s.escape && s.directions == 6)
+      coefficients.emit = lbl::escape_factor(lbl::exact_escape(cl, next->volume, scene.medium.g),
+                                             lbl::lattice_escape(coefficients));
+    next->lattice = std::make_unique<lbl::Lattice>(cl, coefficients, o);
     next->deposit =
         cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));
     next->source = scene.medium.g == 0 ? next->deposit
                                        : cl::Buffer(cl.context(), CL_MEM_READ_WRITE,
                                                     3 * next->volume.count() * sizeof(float));
+    next->flow = scene.medium.g == 0 ? next->deposit
+                                     : cl::Buffer(cl.context(), CL_MEM_READ_WRITE,
+                                                  6 * next->volume.count() * sizeof(float));
     next->material = material_key(scene, s);
     next->density = scene.medium.density;
     state_ = std::move(next);
@@ -251,14 +265,17 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   if (d.march) {
     lbl::RaySet rays = lbl::light_rays(scene.lights, st.volume, s.rays, 4096);
     cl::Buffer ray_buf = upload(cl, rays.rays);
+    const bool with_flow = scene.medium.g != 0;
+    cl::Buffer* flow = with_flow ? &st.flow : nullptr;
     for (cl::Buffer* b : {&st.deposit, &st.source})
       queue.enqueueFillBuffer(*b, 0.f, 0, 3 * st.volume.count() * sizeof(float));
+    if (with_flow) queue.enqueueFillBuffer(st.flow, 0.f, 0, 6 * st.volume.count() * sizeof(float));
     if (s.interleave > 0 && d.diffuse) {
       if (!s.warm) st.lattice->clear();
       int per_round = std::max(1, static_cast<int>(std::lround(s.interleave * s.step)));
       lbl::InterleaveResult ir = lbl::march_interleaved(
           cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff,
-          scene.medium.g, st.deposit, st.source, *st.lattice, s.interleave, per_round);
+          scene.medium.g, st.deposit, st.source, *st.lattice, s.interleave, per_round, flow);
       interleaved_steps = ir.lattice_steps;
       plan_stage(result.plan, "march").reason += "; interleaved: " + std::to_string(ir.rounds) +
                                                  " rounds of " + std::to_string(s.interleave) +
@@ -266,7 +283,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
                                                  std::to_string(per_round) + " lattice steps";
     } else {
       lbl::march(cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff,
-                 scene.medium.g, st.deposit, st.source);
+                 scene.medium.g, st.deposit, st.source, flow);
     }
     queue.finish();
     st.lights = light_key(scene, s);
@@ -307,7 +324,9 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   const float w_single = d.single ? 1.f : 0.f, w_multiple = d.multiple && !d.tiny ? 1.f : 0.f;
   const lbl::ClVolume& v = st.device;
   gpu::set_args(k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_t, v.n, v.grad, st.deposit,
-                st.lattice->irradiance_buffer(), w_single, w_multiple, camera, w, h, d.bend ? 1 : 0,
+                st.lattice->irradiance_buffer(), w_single, w_multiple, st.flow,
+                float(scene.medium.g), scene.medium.g != 0 ? 1 : 0, v.sigma_s,
+                float(s.scaled_view ? scene.medium.g : 0.0), camera, w, h, d.bend ? 1 : 0,
                 float(s.step * st.volume.voxel), out);
   queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
   queue.finish();

@@ -41,6 +41,8 @@ struct LblSettings {
   int block = 4;
   int inner = 1;
   int directions = 6;
+  bool escape = true;
+  bool scaled_view = false;
   double tolerance = 1e-3;
   int max_steps = 20000;
   int check_every = 16;

@@ -101,11 +101,13 @@ RaySet light_rays(const std::vector<Light>& lights, const Volume& v, double per_
 }
 
 void march(gpu::ClContext& cl, const ClVolume& v, const cl::Buffer& rays, int count, bool bend,
-           double step, double cutoff, double g, cl::Buffer& deposit, cl::Buffer& source) {
+           double step, double cutoff, double g, cl::Buffer& deposit, cl::Buffer& source,
+           cl::Buffer* flow) {
   if (count == 0) return;
   cl::Kernel k(cl.program(kProgram), "march_rays");
   gpu::set_args(k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_s, v.sigma_t, v.n, v.grad, rays,
-                count, bend ? 1 : 0, float(step), float(cutoff), float(g), deposit, source);
+                count, bend ? 1 : 0, float(step), float(cutoff), float(g), deposit, source,
+                flow ? *flow : deposit, flow ? 1 : 0);
   cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(count)));
 }
 

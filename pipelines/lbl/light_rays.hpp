@@ -32,9 +32,13 @@ RaySet light_rays(const std::vector<Light>& lights, const Volume& v, double per_
 // follow the ray equation in steps of `step` scene units; otherwise cross voxels exactly.
 // Rays stop when their strongest channel falls under `cutoff` times its start. With g != 0 the
 // delta-Eddington scaled beam's scattering (the lattice's source) goes to `source` (which may
-// then not be `deposit`); with g = 0 the two are the same and `source` is not written.
+// then not be `deposit`); with g = 0 the two are the same and `source` is not written. `flow`
+// (optional, 6 floats per voxel): the scattered power summed over channels times the ray's
+// direction (3 per voxel), for the view pass's phase function, then (3 per voxel, after all
+// of those) what the light the scaled beam kept forward scatters (kernels/lbl/march.cl).
 void march(gpu::ClContext& cl, const ClVolume& v, const cl::Buffer& rays, int count, bool bend,
-           double step, double cutoff, double g, cl::Buffer& deposit, cl::Buffer& source);
+           double step, double cutoff, double g, cl::Buffer& deposit, cl::Buffer& source,
+           cl::Buffer* flow = nullptr);
 
 // Positions after each of `steps` Eikonal steps of `step` scene units from each ray's origin
 // (3 floats per step per ray), for tests of the integrator.

@@ -2,18 +2,83 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "core/errors.hpp"
+#include "pipelines/lbl/escape.hpp"
 #include "pipelines/lbl/lattice.hpp"
 
 namespace scatter::lbl {
 namespace {
 
+constexpr double kPi = std::numbers::pi;
+
 void check(bool ok, const char* field, const std::string& problem) {
   if (!ok) throw ValidationError(field, problem);
 }
 
+double hg(double cos_theta, double g) {
+  double d = 1 + g * g - 2 * g * cos_theta;
+  return (1 - g * g) / (4 * kPi * d * std::sqrt(d));
+}
+
+// The midpoints of `n` equal pieces of (0, 1) in u, mapped by mu = u^2 (denser at grazing
+// angles, where exp(-tau / mu) turns), with their weights d mu.
+std::vector<std::pair<double, double>> mu_nodes(int n) {
+  std::vector<std::pair<double, double>> nodes;
+  for (int i = 0; i < n; ++i) {
+    double u = (i + 0.5) / n;
+    nodes.push_back({u * u, 2 * u / n});
+  }
+  return nodes;
+}
+
+// The chances that isotropic emission spread evenly over layer k (of `layers`, each of optical
+// thickness d) leaves through the lit face (first) and the other (second) without another
+// interaction: (1 / 2 d) integral over the layer of E2(t) dt, with
+// int E2 = (1 / 2) int_0^1 mu (exp(-t0 / mu) - exp(-t1 / mu)) d mu.
+std::pair<double, double> layer_escape(int k, int layers, double d,
+                                       const std::vector<std::pair<double, double>>& nodes) {
+  double up = 0, down = 0;
+  double t0 = k * d, t1 = (k + 1) * d, b0 = (layers - 1 - k) * d, b1 = (layers - k) * d;
+  for (auto [mu, dmu] : nodes) {
+    up += mu * (std::exp(-t0 / mu) - std::exp(-t1 / mu)) * dmu;
+    down += mu * (std::exp(-b0 / mu) - std::exp(-b1 / mu)) * dmu;
+  }
+  return {up / (2 * d), down / (2 * d)};
+}
+
 }  // namespace
+
+SingleScattering slab_single_scattering(const SlabParams& p) {
+  // A beam of unit power per unit area enters at cosine mu0 and scatters at optical depth t with
+  // density a exp(-t / mu0) / mu0 per unit depth; what goes up at cosine mu leaves with
+  // exp(-t / mu), down with exp(-(tau - t) / mu). The depth integrals in closed form:
+  //   up:   mu / (mu + mu0) (1 - exp(-tau (1 / mu0 + 1 / mu)))
+  //   down: (exp(-tau / mu) - exp(-tau / mu0)) / (k mu0), k = 1 / mu0 - 1 / mu
+  // and the directions by quadrature over mu and the azimuth (HG about the beam's direction).
+  SingleScattering s;
+  const double mu0 = p.mu0, tau = p.tau, sin0 = std::sqrt(std::max(0.0, 1 - mu0 * mu0));
+  const int azimuths = 256;
+  for (auto [mu, dmu] : mu_nodes(600)) {
+    double sin1 = std::sqrt(std::max(0.0, 1 - mu * mu));
+    double up = 0, down = 0;
+    for (int j = 0; j < azimuths; ++j) {
+      double c = std::cos(kPi * (j + 0.5) / azimuths);  // phi over (0, pi), doubled below
+      up += hg(sin0 * sin1 * c - mu0 * mu, p.g);
+      down += hg(sin0 * sin1 * c + mu0 * mu, p.g);
+    }
+    double dphi = 2 * kPi / azimuths;
+    double up_depth = mu / (mu + mu0) * -std::expm1(-tau * (1 / mu0 + 1 / mu));
+    double k = 1 / mu0 - 1 / mu;
+    double down_depth = std::abs(k * tau) < 1e-6
+                            ? tau / mu0 * std::exp(-tau / mu)
+                            : (std::exp(-tau / mu) - std::exp(-tau / mu0)) / (k * mu0);
+    s.R += p.albedo * up * dphi * up_depth * dmu;
+    s.T += p.albedo * down * dphi * down_depth * dmu;
+  }
+  return s;
+}
 
 void to_json(nlohmann::json& j, const LblSlabResult& r) {
   j = {{"solver", "lbl"},
@@ -23,6 +88,10 @@ void to_json(nlohmann::json& j, const LblSlabResult& r) {
        {"R_specular", r.R_specular},
        {"T_diffuse", r.T_diffuse},
        {"T_direct", r.T_direct},
+       {"R_single", r.R_single},
+       {"T_single", r.T_single},
+       {"R_lattice", r.R_lattice},
+       {"T_lattice", r.T_lattice},
        {"absorbed", r.absorbed},
        {"layers", r.layers},
        {"steps", r.steps},
@@ -49,7 +118,28 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   v.sigma_s.assign(3 * v.count(), static_cast<float>(p.albedo * dtau));
   v.sigma_t.assign(3 * v.count(), static_cast<float>(dtau));
   LatticeOptions lo{.blocked = false, .edges = {Edge::Periodic, Edge::Periodic, Edge::Open}};
-  Lattice lattice(cl, lattice_coefficients(v, p.g), lo);
+  LatticeCoefficients coeffs = lattice_coefficients(v, p.g);
+  // Escape: per layer, the transport's chance that isotropic emission there leaves without
+  // another collision (the delta-Eddington scaled medium) against the lattice's own (1/6 up and
+  // 1/6 down through the layers' (1 - pt); sideways packets never leave a periodic column).
+  const auto esc_nodes = mu_nodes(400);
+  const double dtau_s = (1 - p.albedo * p.g) * dtau;
+  std::vector<float> escape(3 * v.count(), 1.f);
+  if (o.escape) {
+    const double keep = 1 - coeffs.pt[0];
+    std::vector<float> exact(escape.size()), lattice(escape.size());
+    for (int k = 0; k < r.layers; ++k) {
+      auto [up, down] = layer_escape(k, r.layers, dtau_s, esc_nodes);
+      for (int ch = 0; ch < 3; ++ch) {
+        exact[3 * k + ch] = static_cast<float>(up + down);
+        lattice[3 * k + ch] =
+            static_cast<float>((std::pow(keep, k) + std::pow(keep, r.layers - 1 - k)) / 6);
+      }
+    }
+    escape = escape_factor(exact, lattice);
+    for (size_t i = 0; i < coeffs.ps.size(); ++i) coeffs.ps[i] *= escape[i];
+  }
+  Lattice lattice(cl, coeffs, lo);
   // The beam (power 1 per node's cross-section, travelling +z), delta-Eddington scaled like the
   // lattice: the forward fraction g of its scattering stays in the beam, so it attenuates with
   // sigma_t' = (1 - a g) sigma_t and scatters in layer k what enters it times
@@ -60,20 +150,51 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   for (int k = 0; k < r.layers; ++k) {
     double in = std::exp(-k * dtau_r / p.mu0);
     double s = in * albedo_r * -std::expm1(-dtau_r / p.mu0);
-    for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(s);
+    for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(s) * escape[3 * k + c];
   }
   lattice.set_source(source);
   Convergence c = lattice.converge(o.tolerance, o.max_steps, 64);
   r.steps = c.steps;
   r.converged = c.converged;
-  // Leaving per step: -z out of the first layer (reflected), +z out of the last (transmitted).
+  r.T_direct = std::exp(-p.tau / p.mu0);
+  // What leaves the lattice per step: -z out of the first layer, +z out of the last; what the
+  // scaled beam carries out beyond the unscattered part was scattered forward.
   std::vector<float> f = lattice.state();
   const size_t n = lattice.nodes();
   const int up = 4, down = 5;  // +z, -z
-  r.R_diffuse = f[(down * 3) * n + 0];
-  r.T_direct = std::exp(-p.tau / p.mu0);
-  // What the scaled beam carries out beyond the unscattered part was scattered forward.
-  r.T_diffuse = f[(up * 3) * n + (n - 1)] + std::exp(-r.layers * dtau_r / p.mu0) - r.T_direct;
+  r.R_lattice = f[(down * 3) * n + 0];
+  r.T_lattice = f[(up * 3) * n + (n - 1)] + std::exp(-r.layers * dtau_r / p.mu0) - r.T_direct;
+  // As the pipeline's view pass sees the medium: the single scattering exactly, the lattice's
+  // scattered power per layer (its second and later events) emitted isotropically and leaving
+  // each face with the transport's escape probability from a uniform layer (layer_escape).
+  // scaled_view with g != 0: the whole slab as the delta-Eddington scaled problem (tau (1 - a g),
+  // albedo a (1 - g) / (1 - a g), isotropic), its forward peak left in the beam, which then
+  // carries the light scattered forward out of the far face.
+  SlabParams scaled = p;
+  if (o.scaled_view && p.g != 0) {
+    scaled.tau = p.tau * (1 - p.albedo * p.g);
+    scaled.albedo = albedo_r;
+    scaled.g = 0;
+  }
+  SingleScattering single = slab_single_scattering(scaled);
+  r.R_single = single.R;
+  r.T_single = single.T;
+  const double forward = std::exp(-scaled.tau / p.mu0) - r.T_direct;
+  std::vector<float> irr = lattice.irradiance();
+  // scaled_view: as the pipeline's setting, the lattice's light emitted and attenuated in the
+  // delta-Eddington scaled medium, (1 - g) irr through layers of dtau (1 - a g).
+  const double view_dtau = o.scaled_view ? dtau_s : dtau;
+  const double view_emit = o.scaled_view ? 1 - p.g : 1;
+  double R_multiple = 0, T_multiple = 0;
+  for (int k = 0; k < r.layers; ++k) {
+    double e = irr[3 * k] * view_emit;
+    if (!(e > 0)) continue;
+    auto [e_up, e_down] = layer_escape(k, r.layers, view_dtau, esc_nodes);
+    R_multiple += e * e_up;
+    T_multiple += e * e_down;
+  }
+  r.R_diffuse = r.R_single + R_multiple;
+  r.T_diffuse = r.T_single + T_multiple + forward;
   r.R = r.R_diffuse + r.R_specular;
   r.T = r.T_diffuse + r.T_direct;
   r.absorbed = 1 - r.R - r.T;

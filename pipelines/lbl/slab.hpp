@@ -2,8 +2,11 @@
 // reference's transport solution (pipelines/reference/slab.hpp, same parameters): a column of
 // lattice nodes across the slab, periodic sideways, open at both faces. The collimated beam's
 // scattered power per layer (Beer-Lambert along mu0, as the light march computes it) is the
-// lattice's source; at steady state, what leaves through the lit face is R and through the other
-// face the diffuse part of T.
+// lattice's source. R and T are read as the pipeline's view pass reads the medium: the single
+// scattering exactly (quadrature over directions, HG phase), the lattice's scattered power per
+// layer (its second and later events) emitted isotropically with the transport's escape
+// probability through each face. R_lattice and T_lattice: what the lattice itself lets out
+// through its open faces at steady state (its 6 directions, all orders), for comparison.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -17,18 +20,29 @@ struct LblSlabOptions {
   double layer_tau = 0.1;  // optical thickness of a layer (at most; at least 32 layers)
   double tolerance = 1e-6;
   int max_steps = 400000;
+  bool escape = true;       // scale each layer's emission by the escape correction (escape.hpp)
+  bool scaled_view = true;  // as the pipeline's setting of that name
 };
 
 // Fractions of the incident power.
 struct LblSlabResult {
   double R = 0, T = 0;
   double R_diffuse = 0, R_specular = 0, T_diffuse = 0, T_direct = 0;
-  double absorbed = 0;  // 1 - R - T at steady state
+  double R_single = 0, T_single = 0;    // leaving after exactly one scattering (exact)
+  double R_lattice = 0, T_lattice = 0;  // the lattice's own boundary flux (diffuse, all orders)
+  double absorbed = 0;                  // 1 - R - T at steady state
   int layers = 0, steps = 0;
   bool converged = false;
 };
 
 void to_json(nlohmann::json& j, const LblSlabResult& r);
+
+struct SingleScattering {
+  double R = 0, T = 0;
+};
+// The slab's single scattering (fractions of the incident power leaving through the lit and the
+// other face after exactly one scattering), HG phase, by quadrature: no lattice involved.
+SingleScattering slab_single_scattering(const SlabParams& params);
 
 // Throws ValidationError for parameters out of range or that the lattice does not model (an
 // infinite slab, ior != 1).

@@ -43,6 +43,9 @@ struct LatticeCoefficients {
   int nx = 0, ny = 0, nz = 0;
   std::vector<float> pt, ps, w;                 // 3 per node
   std::vector<float> pt_diag, ps_diag, w_diag;  // 3 per node (18-direction lattice)
+  // 3 per node, or empty (all 1): the fraction of each node's emission (what it scatters and
+  // its source) the lattice carries on (pipelines/lbl/escape.hpp).
+  std::vector<float> emit;
 };
 LatticeCoefficients lattice_coefficients(const Volume& v, double g);
 
