@@ -38,8 +38,9 @@ TEST_F(SinglePipelineTest, HalfSizeSplatKeepsItsPixelsAndInterpolatesTheRest) {
         ref += double(full.rgb[i]) * full.rgb[i];
       }
     }
-  std::printf("kept pixels' worst difference %.2g of the peak; interpolated: %.2f %% relative RMSE\n",
-              worst_kept / peak, 100 * std::sqrt(err / ref));
+  std::printf(
+      "kept pixels' worst difference %.2g of the peak; interpolated: %.2f %% relative RMSE\n",
+      worst_kept / peak, 100 * std::sqrt(err / ref));
   // Kept pixels: the same Gaussians along the same ray (rasterised at another size, so one at
   // the edge of its quad may fall in or out: measured 1.3e-5 of the peak).
   EXPECT_LT(worst_kept, 1e-4 * peak);
