@@ -81,16 +81,16 @@ CalibrationTable CalibrationTable::from_json(const nlohmann::json& j) {
 }
 
 nlohmann::json CalibrationTable::to_json() const {
-  nlohmann::json entries = nlohmann::json::array();
-  for (const CalibrationEntry& e : this->entries)
-    entries.push_back({{"scene", e.scene},
-                       {"class", e.cls},
-                       {"error", e.error},
-                       {"ms", e.ms},
-                       {"noise", e.noise},
-                       {"reference_noise", e.reference_noise}});
+  nlohmann::json rows = nlohmann::json::array();
+  for (const CalibrationEntry& e : entries)
+    rows.push_back({{"scene", e.scene},
+                    {"class", e.cls},
+                    {"error", e.error},
+                    {"ms", e.ms},
+                    {"noise", e.noise},
+                    {"reference_noise", e.reference_noise}});
   return {{"format", kFormat}, {"version", version}, {"command", command},
-          {"width", width},    {"height", height},   {"entries", entries}};
+          {"width", width},    {"height", height},   {"entries", rows}};
 }
 
 std::vector<std::string> CalibrationTable::ways(Terms terms) const {

@@ -106,7 +106,7 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   if (!distance_program_) {
     distance_program_ = build_distance_program();
     integrate_program_ =
-        gpu::build_program("shaders/thickness/integrate.vert", "shaders/thickness/integrate.frag");
+        gpu::build_program("shaders/common/fullscreen.vert", "shaders/thickness/integrate.frag");
     empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
   }
   StageClock clock(result.timings);

@@ -192,8 +192,9 @@ TEST(Planner, KeepsLblAwayFromStronglyForwardScatteringMedia) {
   EXPECT_EQ(said, 2);  // lbl:normal and thickness:normal+lbl:normal
   // At g 0.7 lbl is a candidate again (the table decides).
   BudgetChoice mild = plan_budget(sphere_scene(0.9, 4, 0.7), Terms::All, Budget{0.10}, {}, table());
-  for (const PlanOption& o : mild.alternatives)
+  for (const PlanOption& o : mild.alternatives) {
     EXPECT_EQ(o.note.find("cannot: lbl"), std::string::npos) << o.pipeline << ": " << o.note;
+  }
 }
 
 // No budget asked for: 10 %, but not at any price. Where only the path tracer meets it and that
@@ -206,9 +207,11 @@ TEST(Planner, ASoftBudgetTakesTheMostAccurateWayWithinItsTime) {
   BudgetChoice soft = plan_budget(s, Terms::All, Budget{0.01, true, 30}, {}, table());
   EXPECT_LE(soft.expected_seconds, 30) << soft.reason;
   EXPECT_NE(soft.reason.find("nothing meets it within 30 s"), std::string::npos) << soft.reason;
-  for (const PlanOption& o : soft.alternatives)
-    if (o.expected_seconds <= 30 && o.note.rfind("over budget", 0) == 0)
+  for (const PlanOption& o : soft.alternatives) {
+    if (o.expected_seconds <= 30 && o.note.rfind("over budget", 0) == 0) {
       EXPECT_GE(o.expected_error, soft.expected_error) << o.pipeline;
+    }
+  }
 }
 
 TEST(Planner, TheSingleTermsReferenceIsTheMarcher) {

@@ -1,6 +1,0 @@
-#version 450 core
-// A triangle that covers the screen; no vertex buffers.
-void main() {
-  vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
-  gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
-}
