@@ -370,35 +370,8 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   clock.stop("splat");
 
   if (stride > 1) {
-    if (!upsample_program_)
-      upsample_program_ =
-          gpu::build_program("shaders/common/fullscreen.vert", "shaders/single/upsample.frag");
-    const GLuint up = upsample_program_.get();
-    RenderTarget full(scene.width, scene.height);
-    const GLuint textures[] = {out.color_texture(), front.color_texture(), back.color_texture(),
-                               third.color_texture(), fourth.color_texture()};
-    const char* names[] = {"low", "front", "back", "third", "fourth"};
-    for (int t = 0; t < 5; ++t) {
-      glBindTextureUnit(GLuint(t), textures[t]);
-      uniform1i(up, names[t], t);
-    }
-    uniform1i(up, "stride", stride);
-    uniform1i(up, "clip_back", s.clip_back ? 1 : 0);
-    glProgramUniform1f(up, glGetUniformLocation(up, "sigma_t"), float(current_.sigma_t_median));
-    glProgramUniform1f(up, glGetUniformLocation(up, "depth_scale"),
-                       float(4 * std::max(current_.sigma_median, 1e-6)));
-    full.bind_and_clear(Vec3{});
-    glDisable(GL_DEPTH_TEST);
-    glUseProgram(up);
-    glBindVertexArray(empty_vao_.get());
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    glBindVertexArray(0);
-    glUseProgram(0);
-    for (GLuint t = 0; t < 5; ++t) glBindTextureUnit(t, 0);
-    gpu::check_gl("single upsample");
-    glFinish();
+    result.image = upsample(out, {&front, &back, &third, &fourth}, stride, s.clip_back);
     clock.stop("upsample");
-    result.image = full.read_color();
   } else {
     result.image = out.read_color();
   }

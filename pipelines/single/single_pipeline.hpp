@@ -20,6 +20,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -47,6 +48,8 @@ inline bool phase_per_ray(const Scene& scene) {
 // (shaders/single/upsample.frag): the splat's fragments fall 4x where they are many and the field
 // is smooth over a pixel.
 inline constexpr double kHalfSplatSigmaPx = 4.0;
+
+class RenderTarget;  // pipelines/common/raster.hpp
 // The pixels per world unit at the medium's near side (its bounding sphere's), where splat_scale
 // auto measures the Gaussians.
 double near_pixels_per_unit(const Scene& scene);
@@ -122,6 +125,10 @@ class SinglePipeline : public Pipeline {
   // exact_tr: the per-sample factors by kernels/single/shade.cl, written into colors_.
   // With `gradient`, also each Gaussian's offset into shifts_ (kernels/single/shade.cl).
   void shade_exact(const Scene& scene, bool gradient, bool hessian, double max_gs);
+  // splat_scale: the image from `splat` (one pixel in stride x stride) and the image-size
+  // distance textures front, back, third, fourth (pipelines/single/single_upsample.cpp).
+  Image upsample(const RenderTarget& splat, std::array<const RenderTarget*, 4> surfaces, int stride,
+                 bool clip_back);
 
   gpu::Gpu& gpu_;
   BakeCache* cache_;
