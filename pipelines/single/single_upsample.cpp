@@ -7,8 +7,9 @@
 
 namespace scatter {
 
-Image SinglePipeline::upsample(const RenderTarget& splat, std::array<const RenderTarget*, 4> surfaces,
-                               int stride, bool clip_back) {
+Image SinglePipeline::upsample(const RenderTarget& splat,
+                               std::array<const RenderTarget*, 4> surfaces, int stride,
+                               bool clip_back) {
   if (!upsample_program_)
     upsample_program_ =
         gpu::build_program("shaders/common/fullscreen.vert", "shaders/single/upsample.frag");
