@@ -71,6 +71,7 @@ void to_json(nlohmann::json& j, const PipelineInfo& p) {
        {"bake_stages", stages},
        {"settings", p.settings},
        {"qualities", qualities}};
+  if (!p.moving.empty()) j["moving"] = p.moving;
   if (!p.delegates.empty()) j["delegates"] = p.delegates;
 }
 

@@ -40,6 +40,10 @@ struct PipelineInfo {
   // the bake job's id, known before the job runs.
   std::function<std::string(const Scene&, const Settings&)> bake_key;
   std::vector<Quality> qualities;
+  // Frame-only settings the live view's reduced frames take while the user drags, once at their
+  // smallest size and still over the frame-time budget (server/reduced_frames.hpp); empty: the
+  // draft quality's frame-only settings.
+  Settings moving;
   std::vector<std::string> delegates;  // auto: the pipelines it may choose
   std::function<std::unique_ptr<Pipeline>(gpu::Gpu&, BakeCache*)> make;
   // What a render (bake: a bake) will cost, before it runs (pipelines/cost.hpp).

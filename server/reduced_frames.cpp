@@ -9,12 +9,13 @@ namespace scatter::server {
 
 Settings with_draft(const std::string& pipeline, Settings s) {
   const PipelineInfo& info = pipeline_info(pipeline);
-  for (const Quality& q : info.qualities) {
-    if (q.name != "draft") continue;
-    for (const auto& [key, value] : q.settings)
-      for (const SettingInfo& setting : info.settings)
-        if (setting.key == key && setting.shapes.what == Shapes::What::Frame) s[key] = value;
-  }
+  Settings draft = info.moving;
+  if (draft.empty())
+    for (const Quality& q : info.qualities)
+      if (q.name == "draft") draft = q.settings;
+  for (const auto& [key, value] : draft)
+    for (const SettingInfo& setting : info.settings)
+      if (setting.key == key && setting.shapes.what == Shapes::What::Frame) s[key] = value;
   return s;
 }
 

@@ -34,8 +34,9 @@ class ReducedFrames {
   std::map<std::string, Choice> chosen_;
 };
 
-// `s` with the pipeline's draft quality's settings that shape only the frame (none that would
-// make another bake product or reset a kept state): cheaper frames while the user drags.
+// `s` with the pipeline's settings for moving frames (PipelineInfo::moving, else its draft
+// quality's) that shape only the frame (none that would make another bake product or reset a kept
+// state): cheaper frames while the user drags.
 Settings with_draft(const std::string& pipeline, Settings s);
 
 }  // namespace scatter::server

@@ -109,7 +109,7 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
                           int count,
                           __global const float* lights, int light_count, __global const float* light_tr,
                           __global const float* light_grad, int gradient, int hessian, float max_gs, float g_phase, float3 eye,
-                          __global float4* out, __global float4* shift, __global float4* axes,
+                          float sigma_scale, __global float4* out, __global float4* shift, __global float4* axes,
                           __global float4* cut, __global float* per_light) {
   int i = get_global_id(0);
   if (i >= count) return;
@@ -155,7 +155,7 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   float3 offset = (float3)(0.0f);
   float log_scale = 0.0f;
   float4 depth_cut = (float4)(0.0f);  // zeros: no cut
-  float s = sigma[i];
+  float s = sigma[i] * sigma_scale;  // sample_fraction widens the Gaussians of the prefix drawn
   float3 axis = (float3)(s);
   if (gradient) {
     float3 curv;

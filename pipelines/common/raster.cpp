@@ -21,6 +21,20 @@ CameraMatrices camera_matrices(const Scene& scene) {
   return m;
 }
 
+std::string mesh_key(const Scene& scene) {
+  return scene.mesh_id.empty() ? mesh_digest(*scene.mesh) : scene.mesh_id;
+}
+
+const MeshBuffers& KeptMesh::get(const Scene& scene) {
+  std::string key = mesh_key(scene);
+  if (!mesh_ || key != key_) {
+    mesh_.reset();  // the old buffers go first
+    mesh_ = std::make_unique<MeshBuffers>(*scene.mesh);
+    key_ = std::move(key);
+  }
+  return *mesh_;
+}
+
 MeshBuffers::MeshBuffers(const Mesh& mesh) {
   std::vector<float> interleaved;
   interleaved.reserve(mesh.positions.size() * 6);

@@ -2,6 +2,7 @@
 // buffers, and an offscreen float colour + depth target whose depth later passes can read.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,20 @@ class MeshBuffers {
  private:
   gpu::GlObject vao_, vertices_, indices_;
   GLsizei count_ = 0;
+};
+
+// What identifies the scene's mesh: its mesh_id, else its digest (which costs a pass over it).
+std::string mesh_key(const Scene& scene);
+
+// The scene's mesh in GL buffers, kept across frames while the mesh stays the same (a camera or
+// light move uploads nothing): the pipelines that draw the mesh every frame keep one.
+class KeptMesh {
+ public:
+  const MeshBuffers& get(const Scene& scene);
+
+ private:
+  std::string key_;
+  std::unique_ptr<MeshBuffers> mesh_;
 };
 
 class RenderTarget {

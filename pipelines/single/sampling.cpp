@@ -111,6 +111,38 @@ EliminationResult eliminate_samples(const std::vector<Vec3>& candidates,
   return result;
 }
 
+std::vector<int> progressive_order(const std::vector<Vec3>& points, const std::vector<float>& q,
+                                   double volume, int min_count) {
+  const int n = static_cast<int>(points.size());
+  std::vector<int> order(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) order[size_t(i)] = i;
+  // order[0, left) is the set still being halved; order[left, n) the points already lost, the
+  // latest losses first.
+  int left = n;
+  std::vector<Vec3> set_points = points;
+  std::vector<float> set_q = q;
+  while (left / 2 >= std::max(min_count, 1)) {
+    const int half = left / 2;
+    EliminationResult kept = eliminate_samples(set_points, set_q, volume, half);
+    std::vector<char> in(static_cast<size_t>(left), 0);
+    for (int k : kept.kept) in[size_t(k)] = 1;
+    std::vector<int> next;
+    next.reserve(static_cast<size_t>(left));
+    for (int k : kept.kept) next.push_back(order[size_t(k)]);
+    for (int k = 0; k < left; ++k)
+      if (!in[size_t(k)]) next.push_back(order[size_t(k)]);
+    std::copy(next.begin(), next.end(), order.begin());
+    left = half;
+    set_points.resize(size_t(left));
+    set_q.resize(size_t(left));
+    for (int k = 0; k < left; ++k) {
+      set_points[size_t(k)] = points[size_t(order[size_t(k)])];
+      set_q[size_t(k)] = q[size_t(order[size_t(k)])];
+    }
+  }
+  return order;
+}
+
 double min_normalized_distance(const std::vector<Vec3>& points, const std::vector<float>& q) {
   if (points.size() < 2) return INFINITY;
   Aabb box;

@@ -28,6 +28,13 @@ EliminationResult eliminate_samples(const std::vector<Vec3>& candidates,
                                     const std::vector<float>& q, double volume, int target,
                                     const std::function<void(double)>& progress = {});
 
+// A progressive order of `points` (Yuksel 2015, section 5): repeated elimination halves the set
+// down to `min_count`, each half kept ahead of the points it lost, so that every prefix of 1/2,
+// 1/4, ... of the points is itself a Poisson-disk set with a radius 2^(1/3), 4^(1/3), ... times
+// the whole's (and any prefix nearly so). Returns the indices in that order.
+std::vector<int> progressive_order(const std::vector<Vec3>& points, const std::vector<float>& q,
+                                   double volume, int min_count = 256);
+
 // Smallest normalised distance between two kept samples: |a - b| / ((q_a + q_b) / 2).
 double min_normalized_distance(const std::vector<Vec3>& points, const std::vector<float>& q);
 

@@ -313,6 +313,20 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
   EliminationResult kept = eliminate_samples(candidates, cq, volume, p.samples,
                                              [&](double f) { report("sampling", 0.2 + 0.8 * f); });
   bake.count = p.samples;
+  // In progressive order: the first half, quarter, ... of the samples are Poisson-disk sets
+  // themselves (sample_fraction splats such a prefix while the user drags).
+  {
+    std::vector<Vec3> kept_points;
+    std::vector<float> kept_q;
+    for (int c : kept.kept) {
+      kept_points.push_back(candidates[size_t(c)]);
+      kept_q.push_back(cq[size_t(c)]);
+    }
+    std::vector<int> order = progressive_order(kept_points, kept_q, volume);
+    std::vector<int> ordered(order.size());
+    for (size_t k = 0; k < order.size(); ++k) ordered[k] = kept.kept[size_t(order[k])];
+    kept.kept = std::move(ordered);
+  }
   bake.position.reserve(3 * size_t(bake.count));
   std::vector<float>& depth_position = bake.depth_at;
   auto voxel_centre = [&](size_t v) {

@@ -62,6 +62,12 @@ struct SingleBakeParams {
   void check() const;
 };
 
+// The coarse set of n samples (setting `coarse`): the first quarter, two halvings of their
+// progressive order (pipelines/single/sampling.hpp); none below 1024 samples.
+inline int coarse_count(int n) {
+  return n / 2 / 2 >= 256 ? n / 2 / 2 : 0;
+}
+
 struct SingleBake {
   SingleBakeParams params;
   int count = 0;
@@ -74,6 +80,9 @@ struct SingleBake {
   std::vector<float>
       plane;      // 4 per sample: it counts where n . x <= d (xyz n, w d); zeros: everywhere
   int split = 0;  // samples split in two at a jump (count includes the extra pieces)
+  // Per piece: its weight in the coarse set (the first coarse_count(samples) samples, widened by
+  // cbrt(samples / coarse), and the pieces split off them); zero for the others. Empty: none.
+  std::vector<float> coarse_weight;
   std::vector<float> sh;  // per sample, per channel, sh_order^2 coefficients
   // Sum of the Gaussians at the voxel centres inside: mean and relative standard deviation.
   double coverage_mean = 0, coverage_spread = 0;

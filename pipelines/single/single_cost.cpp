@@ -92,16 +92,19 @@ CostEstimate SinglePipeline::estimate(const Scene& scene, const RenderRequest& r
   // Shade (exact_tr): each sample marches ~side voxels to the eye and to each light. Splat:
   // per covered pixel ~9 x (side / spacing) overlapping Gaussians (3-sigma quads, spacing ~
   // longest / cbrt(samples)).
+  // coarse: a quarter splatted, its Gaussians widened (so fewer overlap a pixel).
+  const double drawn =
+      s.coarse && s.exact_tr && coarse_count(p.samples) > 0 ? samples / 4 : samples;
   if (s.exact_tr)
-    frame.time(
-        "settings.samples", pieces * (1 + lights) * side * 20e-9,
-        std::to_string(p.samples) + " samples x " + std::to_string(int(lights + 1)) + " rays");
-  const double overlap = 9 * std::cbrt(samples);
+    frame.time("settings.samples", 2 * drawn * (1 + lights) * side * 20e-9,
+               std::to_string(int(std::lround(drawn))) + " samples x " +
+                   std::to_string(int(lights + 1)) + " rays");
+  const double overlap = 9 * std::cbrt(drawn);
   // splat_scale: one pixel in stride x stride splatted (auto: by the sigma the spacing of
   // `samples` in the mesh's box gives).
   Aabb box = scene.mesh->bounds();
   const Vec3 size = box.size();
-  const double sigma = p.radius * std::cbrt(size.x * size.y * size.z / samples);
+  const double sigma = p.radius * std::cbrt(size.x * size.y * size.z / drawn);
   const int stride = splat_stride(s.splat_scale, sigma, scene);
   frame.time("scene.image.width",
              px * coverage(scene) * overlap * 60e-9 / (stride * stride) + px * 4 * 200e-9,

@@ -6,17 +6,24 @@
 
 namespace scatter::single_detail {
 
-void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell,
-                    const SingleBakeParams& p, SingleBake& bake,
-                    const std::function<void(double)>& report) {
+namespace {
+
+Vec3 position_of(const SingleBake& b, int i) {
+  return {b.position[3 * size_t(i)], b.position[3 * size_t(i) + 1], b.position[3 * size_t(i) + 2]};
+}
+
+// The samples' weights: start from spacing^3 / Gaussian volume, then rescale each weight by the
+// Gaussian-weighted mean of 1 / (sum of all Gaussians) over the voxel centres of the medium and all
+// but the outermost shell layer, then weight_fit. Returns the Gaussians' sum per voxel.
+std::vector<double> fit_weights(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell,
+                                const SingleBakeParams& p, SingleBake& bake,
+                                const std::function<void(double)>& report) {
   const size_t voxels = g.count();
   // Weights: start from spacing^3 / Gaussian volume, then rescale each weight by the
   //    Gaussian-weighted mean of 1 / (sum of all Gaussians) over the voxel centres of the medium
   //    and all but the outermost shell layer.
   const int n = bake.count;
-  auto pos = [&](int i) {
-    return Vec3{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]};
-  };
+  auto pos = [&](int i) { return position_of(bake, i); };
   bake.weight.resize(n);
   for (int i = 0; i < n; ++i) {
     double spacing = bake.sigma[i] / p.radius;
@@ -119,6 +126,36 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
     for (int i = 0; i < n; ++i) bake.weight[i] = static_cast<float>(std::max(0.0, w[i]));
   }
   accumulate();
+  return sum;
+}
+
+}  // namespace
+
+void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell,
+                    const SingleBakeParams& p, SingleBake& bake,
+                    const std::function<void(double)>& report) {
+  const size_t voxels = g.count();
+  const int n = bake.count;
+  auto pos = [&](int i) { return position_of(bake, i); };
+  const size_t threads = thread_count(size_t(n));
+  std::vector<double> sum =
+      fit_weights(g, layer, shell, p, bake, [&](double f) { report(0.8 * f); });
+  // The coarse set (setting `coarse`): the first quarter of the samples, which their progressive
+  // order makes Poisson-disk, widened to fill the same volume, with weights fitted for them.
+  const int coarse = coarse_count(n);
+  bake.coarse_weight.clear();
+  if (coarse > 0) {
+    SingleBake c;
+    c.count = coarse;
+    c.position.assign(bake.position.begin(), bake.position.begin() + 3 * size_t(coarse));
+    const double widen = std::cbrt(double(n) / coarse);
+    for (int i = 0; i < coarse; ++i) c.sigma.push_back(float(bake.sigma[size_t(i)] * widen));
+    SingleBakeParams cp = p;
+    cp.weight_fit = std::min(p.weight_fit, 10);
+    fit_weights(g, layer, shell, cp, c, [&](double f) { report(0.8 + 0.05 * f); });
+    bake.coarse_weight = std::move(c.weight);
+    bake.coarse_weight.resize(size_t(n), 0.f);
+  }
   double s1 = 0, s2 = 0, cnt = 0;
   for (size_t v = 0; v < voxels; ++v)
     if (g.inside[v]) {

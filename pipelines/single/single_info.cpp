@@ -42,6 +42,10 @@ const SettingsTable<SingleSettings>& single_settings() {
                "the splat's size over the image's, upsampled along the view rays' chords (0: "
                "half where the median Gaussian spans at least 4 pixels, else full; else at "
                "least 0.25)"),
+       flag("coarse", &S::coarse, frame(),
+            "1: splat the bake's coarse set, a quarter of the samples (their progressive order "
+            "makes them Poisson-disk) widened by 4^(1/3), with weights fitted for them (the live "
+            "view's moving frames; needs exact_tr)"),
        flag("clip_back", &S::clip_back, frame(),
             "1: clip to the medium's first two intervals along the ray by depth peeling; 0: the "
             "paper's "
@@ -97,7 +101,10 @@ const PipelineInfo& single_info() {
            },
        .qualities = {{"draft", {{"samples", 5000}, {"directions", 64}}},
                      {"normal", {}},
-                     {"high", {{"samples", 100000}, {"directions", 256}}}}});
+                     {"high", {{"samples", 100000}, {"directions", 256}}}},
+       // While the user drags: the coarse set (a quarter of the samples), splatted at half size,
+       // each with the transmittance at its centre (docs/BENCHMARKS.md: the single drag).
+       .moving = {{"coarse", 1}, {"splat_scale", 0.5}, {"tr_gradient", 0}}});
   return info;
 }
 

@@ -21,7 +21,7 @@ namespace scatter {
 namespace {
 
 // Bump when the bake's results change, so old cache entries are not reused.
-constexpr const char* kSingleBakeVersion = "single-7";
+constexpr const char* kSingleBakeVersion = "single-8";  // 8: samples in progressive order
 
 }  // namespace
 
@@ -260,13 +260,22 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   if (!current_.uploaded) upload();
   const SingleBake& b = *current_.bake;
 
-  MeshBuffers mesh(*scene.mesh);
+  const MeshBuffers& mesh = mesh_.get(scene);
   CameraMatrices cam = camera_matrices(scene);
   const Vec3& eye = scene.camera.position;
   // splat_scale: the splat evaluates every stride-th pixel of the image; the upsample below
   // fills in the rest.
-  const int stride = splat_stride(s.splat_scale, current_.sigma_median, scene);
-  const double sigma_px = current_.sigma_median * near_pixels_per_unit(scene);
+  // coarse (exact_tr): the bake's coarse set, the first samples of its progressive order widened.
+  const DrawnSamples drawn = drawn_samples(b, s.coarse && s.exact_tr);
+  const double sigma_median = current_.sigma_median * drawn.sigma_scale;
+  const int stride = splat_stride(s.splat_scale, sigma_median, scene);
+  const double sigma_px = sigma_median * near_pixels_per_unit(scene);
+  for (StagePlan& stage : result.plan.stages)
+    if (stage.name == "splat" && s.coarse)
+      stage.reason += drawn.coarse ? "; the coarse set: " + std::to_string(drawn.count()) +
+                                         " of the " + std::to_string(b.count) +
+                                         " pieces, sigma x " + exact_number(drawn.sigma_scale)
+                                   : "; every sample (coarse needs exact_tr and 1024 samples)";
   const int lw = (scene.width + stride - 1) / stride, lh = (scene.height + stride - 1) / stride;
   for (StagePlan& stage : result.plan.stages)
     if (stage.name == "splat" && stride > 1)
@@ -293,7 +302,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
 
   const GLuint shade = shade_program_.get();
   if (s.exact_tr) {
-    shade_exact(scene, s.tr_gradient, s.tr_hessian, s.tr_gradient_max);
+    shade_exact(scene, drawn, s.tr_gradient, s.tr_hessian, s.tr_gradient_max);
     current_.moved = true;
   } else if (current_.moved) {
     reset_moves();  // the SH path moves and stretches nothing
@@ -355,7 +364,10 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glBlendFunc(GL_ONE, GL_ONE);
   glUseProgram(splat);
   glBindVertexArray(empty_vao_.get());
-  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, b.count);
+  for (const auto& [first, count] : drawn.ranges) {
+    uniform1i(splat, "first", first);
+    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, count);
+  }
   glBindVertexArray(0);
   glUseProgram(0);
   glDisable(GL_BLEND);

@@ -25,9 +25,12 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "gpu/cl_context.hpp"
 #include "gpu/gl_objects.hpp"
+#include "pipelines/common/raster.hpp"
 #include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 #include "pipelines/settings_table.hpp"
@@ -49,7 +52,6 @@ inline bool phase_per_ray(const Scene& scene) {
 // is smooth over a pixel.
 inline constexpr double kHalfSplatSigmaPx = 4.0;
 
-class RenderTarget;  // pipelines/common/raster.hpp
 // The pixels per world unit at the medium's near side (its bounding sphere's), where splat_scale
 // auto measures the Gaussians.
 double near_pixels_per_unit(const Scene& scene);
@@ -59,9 +61,26 @@ inline int splat_stride(double scale, double sigma, const Scene& scene) {
   return sigma * near_pixels_per_unit(scene) >= kHalfSplatSigmaPx ? 2 : 1;
 }
 
+// The samples a frame splats: all, or (coarse) the bake's coarse set, the first coarse_count of
+// its progressive order and the pieces split off them, as index ranges (first, count), each
+// Gaussian's sigma times sigma_scale so that the fewer fill the same volume, with the coarse
+// weights (pipelines/single/single_prefix.cpp).
+struct DrawnSamples {
+  std::vector<std::pair<int, int>> ranges;
+  double sigma_scale = 1;
+  bool coarse = false;
+  int count() const {
+    int n = 0;
+    for (const auto& r : ranges) n += r.second;
+    return n;
+  }
+};
+DrawnSamples drawn_samples(const SingleBake& bake, bool coarse);
+
 struct SingleSettings {
   SingleBakeParams bake;
   double splat_scale = 0.0;  // 0: auto (above); else the splat's size over the image's, >= 0.25
+  bool coarse = false;  // the bake's coarse set (a quarter of the samples, widened, own weights)
   bool clip_back = true;
   bool exact_tr = true;
   bool tr_gradient = true;
@@ -123,8 +142,10 @@ class SinglePipeline : public Pipeline {
   // cut in cuts_.
   void reset_moves();
   // exact_tr: the per-sample factors by kernels/single/shade.cl, written into colors_.
-  // With `gradient`, also each Gaussian's offset into shifts_ (kernels/single/shade.cl).
-  void shade_exact(const Scene& scene, bool gradient, bool hessian, double max_gs);
+  // With `gradient`, also each Gaussian's offset into shifts_ (kernels/single/shade.cl). Only the
+  // `drawn` samples, their sigma scaled.
+  void shade_exact(const Scene& scene, const DrawnSamples& drawn, bool gradient, bool hessian,
+                   double max_gs);
   // splat_scale: the image from `splat` (one pixel in stride x stride) and the image-size
   // distance textures front, back, third, fourth (pipelines/single/single_upsample.cpp).
   Image upsample(const RenderTarget& splat, std::array<const RenderTarget*, 4> surfaces, int stride,
@@ -132,13 +153,14 @@ class SinglePipeline : public Pipeline {
 
   gpu::Gpu& gpu_;
   BakeCache* cache_;
+  KeptMesh mesh_;  // the depth peel's
   std::unique_ptr<BakeCache> own_cache_;
   Current current_;
   gpu::GlObject distance_program_, shade_program_, splat_program_, upsample_program_, empty_vao_;
   gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_, planes_,
       cuts_, light_factors_;
-  cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_sigma_s_, cl_plane_,
-      cl_out_, cl_shift_, cl_axes_, cl_cut_, cl_light_factor_;
+  cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_coarse_weight_,
+      cl_sigma_s_, cl_plane_, cl_out_, cl_shift_, cl_axes_, cl_cut_, cl_light_factor_;
   size_t light_factor_floats_ = 0;  // the size of light_factors_ and cl_light_factor_
 };
 

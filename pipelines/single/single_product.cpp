@@ -11,7 +11,7 @@ namespace {
 
 // ---- Serialisation: a flat little-endian record -----------------------------------------------
 
-constexpr uint32_t kMagic = 0x36425353;  // "SSB6"
+constexpr uint32_t kMagic = 0x37425353;  // "SSB7": with the coarse set's weights
 
 class Writer {
  public:
@@ -85,6 +85,8 @@ std::string SingleBake::serialize() const {
   w.put_floats(weight);
   w.put_floats(sigma_s);
   w.put_floats(plane);
+  w.put<int32_t>(coarse_weight.empty() ? 0 : 1);
+  if (!coarse_weight.empty()) w.put_floats(coarse_weight);
   w.put_floats(sh);
   w.put<uint32_t>(static_cast<uint32_t>(timings.size()));
   for (const StageTime& t : timings) {
@@ -125,6 +127,7 @@ SingleBake SingleBake::deserialize(const std::string& bytes) {
   b.weight = r.get_floats(n);
   b.sigma_s = r.get_floats(3 * n);
   b.plane = r.get_floats(4 * n);
+  if (r.get<int32_t>() != 0) b.coarse_weight = r.get_floats(n);
   b.sh = r.get_floats(3 * n * b.coefficients());
   uint32_t stages = r.get<uint32_t>();
   if (stages > 64) throw std::runtime_error("single bake: bad stage list");

@@ -9,7 +9,8 @@
 
 namespace scatter {
 
-void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian, double max_gs) {
+void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, bool gradient,
+                                 bool hessian, double max_gs) {
   const SingleBake& b = *current_.bake;
   const VoxelGrid& g = *current_.grid;
   gpu::ClContext& cl = gpu_.cl();
@@ -21,6 +22,7 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
     cl_position_ = scatter::upload(cl, b.position);
     cl_sigma_ = scatter::upload(cl, b.sigma);
     cl_weight_ = scatter::upload(cl, b.weight);
+    cl_coarse_weight_ = scatter::upload(cl, b.coarse_weight.empty() ? b.weight : b.coarse_weight);
     cl_sigma_s_ = scatter::upload(cl, b.sigma_s);
     cl_plane_ = scatter::upload(
         cl, b.plane.empty() ? std::vector<float>(size_t(std::max(b.count, 1)) * 4, 0.f) : b.plane);
@@ -51,6 +53,12 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
     std::string key = std::to_string(int(light.type)) + ":" + exact_number(where.x) + "," +
                       exact_number(where.y) + "," + exact_number(where.z) + (gradient ? ":g" : "");
     auto found = current_.light_tr.find(key);
+    // A frame without the gradient can use a kept pass with it (the transmittance is the same):
+    // the live view's moving frames and its still frame share the light's pass.
+    if (found == current_.light_tr.end() && !gradient) {
+      found = current_.light_tr.find(key + ":g");
+      if (found != current_.light_tr.end()) key += ":g";
+    }
     std::pair<cl::Buffer, cl::Buffer> tr;
     if (found != current_.light_tr.end()) {
       tr = found->second;
@@ -86,11 +94,13 @@ void SinglePipeline::shade_exact(const Scene& scene, bool gradient, bool hessian
   const Vec3& e = scene.camera.position;
   cl_float3 eye{{float(e.x), float(e.y), float(e.z)}};
   gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_position_,
-                cl_sigma_, cl_weight_, cl_sigma_s_, cl_plane_, b.count, lights,
-                static_cast<int>(scene.lights.size()), all, all_grad, gradient ? 1 : 0,
-                hessian ? 1 : 0, float(max_gs), float(scene.medium.g), eye, cl_out_, cl_shift_,
-                cl_axes_, cl_cut_, cl_light_factor_);
-  cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(size_t(std::max(b.count, 1))));
+                cl_sigma_, drawn.coarse ? cl_coarse_weight_ : cl_weight_, cl_sigma_s_, cl_plane_,
+                b.count, lights, static_cast<int>(scene.lights.size()), all, all_grad,
+                gradient ? 1 : 0, hessian ? 1 : 0, float(max_gs), float(scene.medium.g), eye,
+                float(drawn.sigma_scale), cl_out_, cl_shift_, cl_axes_, cl_cut_, cl_light_factor_);
+  for (const auto& [first, count] : drawn.ranges)
+    if (count > 0)
+      cl.queue().enqueueNDRangeKernel(k, cl::NDRange(size_t(first)), cl::NDRange(size_t(count)));
   std::vector<float> out(size_t(b.count) * 4), shift(size_t(b.count) * 4),
       axes(size_t(b.count) * 4), cut(size_t(b.count) * 4);
   cl.queue().enqueueReadBuffer(cl_out_, CL_TRUE, 0, out.size() * sizeof(float), out.data());

@@ -134,6 +134,7 @@ int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double
                          {float(s.anchor.x), float(s.anchor.y), float(s.anchor.z)});
     bake.sigma.push_back(bake.sigma[i]);
     bake.weight.push_back(bake.weight[i]);
+    if (!bake.coarse_weight.empty()) bake.coarse_weight.push_back(bake.coarse_weight[i]);
     bake.plane.insert(bake.plane.end(), {float(-s.n.x), float(-s.n.y), float(-s.n.z), float(-d)});
   }
   bake.count = n + made;

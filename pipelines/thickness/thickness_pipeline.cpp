@@ -40,10 +40,6 @@ Plan ThicknessPipeline::describe(const Scene& scene, Terms terms,
   return p;
 }
 
-std::string ThicknessPipeline::mesh_key(const Scene& scene) {
-  return scene.mesh_id.empty() ? mesh_digest(*scene.mesh) : scene.mesh_id;
-}
-
 // What the shadow maps depend on: the mesh (its bounds place the light's frustum), each light's
 // type, position and direction, and the maps' size.
 std::string ThicknessPipeline::shadows_key(const Scene& scene, const ThicknessSettings& s) {
@@ -60,16 +56,6 @@ const ThicknessPipeline::Shadows* ThicknessPipeline::kept_shadows(const std::str
   for (const Shadows& s : kept_)
     if (s.key == key) return &s;
   return nullptr;
-}
-
-const MeshBuffers& ThicknessPipeline::mesh(const Scene& scene) {
-  std::string key = mesh_key(scene);
-  if (!mesh_ || key != mesh_key_) {
-    mesh_.reset();  // the old buffers go first
-    mesh_ = std::make_unique<MeshBuffers>(*scene.mesh);
-    mesh_key_ = std::move(key);
-  }
-  return *mesh_;
 }
 
 const ThicknessPipeline::Shadows& ThicknessPipeline::shadows(const Scene& scene,
@@ -110,7 +96,7 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
     empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
   }
   StageClock clock(result.timings);
-  const MeshBuffers& mesh = this->mesh(scene);
+  const MeshBuffers& mesh = mesh_.get(scene);
   const GLuint dist = distance_program_.get(), integ = integrate_program_.get();
   const bool kept = kept_shadows(shadows_key(scene, s)) != nullptr;
   const Shadows& sh = shadows(scene, s, mesh);

@@ -51,17 +51,14 @@ class ThicknessPipeline : public Pipeline {
   };
   // The stages for this scene, terms and settings.
   Plan describe(const Scene& scene, Terms terms, const ThicknessSettings& s) const;
-  static std::string mesh_key(const Scene& scene);
   static std::string shadows_key(const Scene& scene, const ThicknessSettings& s);
   const Shadows* kept_shadows(const std::string& key) const;
   // The shadow maps for the scene's lights: kept ones, else drawn (and kept).
   const Shadows& shadows(const Scene& scene, const ThicknessSettings& s, const MeshBuffers& mesh);
-  const MeshBuffers& mesh(const Scene& scene);
 
   gpu::Gpu& gpu_;
   gpu::GlObject distance_program_, integrate_program_, empty_vao_;
-  std::string mesh_key_;
-  std::unique_ptr<MeshBuffers> mesh_;
+  KeptMesh mesh_;
   std::list<Shadows> kept_;  // most recently used first
 };
 

@@ -21,6 +21,8 @@ uniform vec3 eye;
 // A splat at 1/stride of the image's size evaluates the image's pixel (stride i, stride j) at its
 // pixel (i, j): this moves the quads by the difference of the two centres, in clip space.
 uniform vec2 ndc_shift;
+// The draw's first sample (the coarse set is drawn as a prefix and the pieces split off it).
+uniform int first;
 
 flat out vec3 center;
 flat out vec3 gauss_sigma;
@@ -32,7 +34,7 @@ flat out vec4 depth_cut;
 flat out int sample_index;
 
 void main() {
-  uint i = uint(gl_InstanceID);
+  uint i = uint(first + gl_InstanceID);
   center = vec3(position[3u * i], position[3u * i + 1u], position[3u * i + 2u]) + shift[i].xyz;
   gauss_sigma = axes[i].xyz;
   factor = color[i].rgb;

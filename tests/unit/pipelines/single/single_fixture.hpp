@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include "../../test_util.hpp"
 #include "pipelines/metrics.hpp"
@@ -44,6 +45,35 @@ inline Expected reference_single(const Scene& s) {
   ReferencePipeline ref(test::shared_gpu());
   return {ref.render(s, {Terms::Single, {{"step", 0.25}}, nullptr}).image,
           coverage_mask(s, voxelize(s, {.resolution = s.voxels}))};
+}
+
+// small_sphere()'s bake of 6000 samples over 32 directions.
+inline SingleBake small_sphere_bake() {
+  Scene s = small_sphere();
+  VoxelGrid grid = voxelize(s, {.resolution = s.voxels, .margin = kSingleGridMargin});
+  SingleBakeParams p;
+  p.samples = 6000;
+  p.directions = 32;
+  return bake_single(test::shared_gpu().cl(), grid, p);
+}
+
+// Mean and standard deviation of the Gaussians' sum at 400 random points inside the unit sphere
+// (up to 0.98 from its centre).
+inline std::pair<double, double> coverage(const SingleBake& b) {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-1, 1);
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  while (n < 400) {
+    Vec3 x{u(rng), u(rng), u(rng)};
+    if (length(x) > 0.98) continue;
+    double g = gaussian_sum(b, x);
+    sum += g;
+    sum2 += g * g;
+    ++n;
+  }
+  double mean = sum / n;
+  return {mean, std::sqrt(std::max(0.0, sum2 / n - mean * mean))};
 }
 
 // Sum of a's pixels over sum of b's.

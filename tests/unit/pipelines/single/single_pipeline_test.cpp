@@ -99,28 +99,11 @@ TEST(SingleBake, FirstMomentMatchesCpuSum) {
 }
 
 TEST(SingleBake, GaussiansSumToAboutOneInside) {
-  Scene s = small_sphere();
-  VoxelGrid grid = voxelize(s, {.resolution = s.voxels, .margin = kSingleGridMargin});
-  SingleBakeParams p;
-  p.samples = 6000;
-  p.directions = 32;
-  SingleBake b = bake_single(test::shared_gpu().cl(), grid, p);
+  SingleBake b = small_sphere_bake();
   ASSERT_EQ(b.count, 6000);
   EXPECT_NEAR(b.coverage_mean, 1.0, 0.02);
   // Away from the voxel centres too: random points inside the sphere, up to its surface.
-  std::mt19937 rng(2);
-  std::uniform_real_distribution<double> u(-1, 1);
-  double sum = 0, sum2 = 0;
-  int n = 0;
-  while (n < 400) {
-    Vec3 x{u(rng), u(rng), u(rng)};
-    if (length(x) > 0.98) continue;
-    double g = gaussian_sum(b, x);
-    sum += g;
-    sum2 += g * g;
-    ++n;
-  }
-  double mean = sum / n, spread = std::sqrt(sum2 / n - mean * mean);
+  auto [mean, spread] = coverage(b);
   EXPECT_NEAR(mean, 1.0, 0.03);
   EXPECT_LT(spread, 0.12);
   // Without normalisation the sum would follow the sample density, which varies 64-fold here.
