@@ -64,10 +64,11 @@ std::vector<std::string> PsfPipeline::light_keys(const Scene& scene) const {
 
 void PsfPipeline::check_memory(const Scene& scene) {
   // Per light: three float4 volumes and the pyramid (1 + 1/8 + ... < 8/7 of a volume); the medium:
-  // sigma_s and sigma_t (RGB floats). The grid has at most (voxels + 2)^3 voxels.
+  // sigma_s and sigma_t (RGB floats) and the occupancy (a float). The grid has at most
+  // (voxels + 2)^3 voxels.
   const double n = std::pow(double(scene.voxels) + 2, 3);
   const double per_light = n * 16 * (3 + 8.0 / 7), pyramid = n * 16 * 8.0 / 7;
-  const double need = per_light * std::max<size_t>(scene.lights.size(), 1) + n * 24;
+  const double need = per_light * std::max<size_t>(scene.lights.size(), 1) + n * 28;
   const gpu::ClDeviceInfo& info = gpu_.cl().info();
   const double have = 0.75 * double(info.global_memory);
   auto mib = [](double b) {

@@ -86,7 +86,8 @@ TEST(PsfOrders, KernelsMatchTheCpuOrders) {
     Volume3 phi = q;
     for (int c = 0; c < 3; ++c) {
       const double st = params.mean_sigma_t[c];
-      Volume3 blurred = blur_gaussian(q, std::sqrt(order_flight(0, order).variance) / st / k.m.voxel);
+      Volume3 blurred =
+          blur_gaussian(q, std::sqrt(order_flight(0, order).variance) / st / k.m.voxel);
       for (size_t i = c; i < phi.rgb.size(); i += 3)
         phi.rgb[i] = static_cast<float>(blurred.rgb[i] / st);
     }
@@ -160,7 +161,7 @@ TEST(PsfOrders, ConservingKernelsMatchTheCpuOrders) {
         scattered += q.rgb[i];
       }
     }
-    EXPECT_LE(collided, power * 1.0001) << order;  // what stays inside, at most all
+    EXPECT_LE(collided, power * 1.0001) << order;         // what stays inside, at most all
     EXPECT_LE(scattered, 0.9 * power * 1.0001) << order;  // and the albedo's share of it
     power = scattered;
   }
