@@ -111,8 +111,11 @@ Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, co
       {"orders", orders && changed > 0,
        !need_pyramid ? "the multiple term is not rendered"
        : !orders     ? "model 0 (the paper's): the march reads the pyramid at one path length"
-       : changed ? lights + ": the scattering orders on a coarse pyramid level, each spread and "
-                            "drifted by its flight (model 1, orders)"
+       : changed     ? lights +
+                       ": the scattering orders on a coarse pyramid level, each spread and "
+                       "drifted by its flight (model 1, orders" +
+                       (s.conserve ? std::string(", each flight's collisions conserved)")
+                                   : std::string(", b capped at the albedo x mean c)"))
                  : "every light's orders are reused (camera-only change)"});
   p.stages.push_back({"march_single", request.terms != Terms::Multiple,
                       request.terms == Terms::Multiple ? "single term not requested"

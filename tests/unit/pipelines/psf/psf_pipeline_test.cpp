@@ -92,6 +92,7 @@ TEST(PsfPipeline, SphereMultipleTermIsNearTheReference) {
   PsfPipeline p(test::shared_gpu());
   RenderResult orders = p.render(s, {Terms::Multiple, {}});
   EXPECT_NE(orders.plan.stages[3].reason.find("model 1"), std::string::npos);
+  EXPECT_NE(orders.plan.stages[3].reason.find("collisions conserved"), std::string::npos);
   for (float x : orders.image.rgb) ASSERT_TRUE(std::isfinite(x) && x >= 0.f);
   const double error = relative_rmse(orders.image, ref.image, mask);
   std::printf("orders: relative RMSE %.4f\n", error);
