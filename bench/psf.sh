@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Figures for the psf pipeline in docs/BENCHMARKS.md (about 40 minutes on 2 CPU cores):
-#  (PART=errors or PART=time runs one half; PART=models the model 0 / model 1 table below.)
+#  (PART=errors or PART=time runs one half; PART=models the model 0 / model 1 table below;
+#  PART=conserve model 1's conserve against its cap, after PART=models.)
 #  - error of the multiple term (and of all terms) against the reference path tracer on sphere
 #    (g 0 and 0.9, and albedo 0.5), layers and bunny, over the attenuation choice and the width
 #    formula's shift, 128 x 128;
@@ -31,7 +32,7 @@ s["lights"] = [dict(light, position=[3 * math.cos(a), 2.0, 3 * math.sin(a)], int
 json.dump(s, open(f"{out}/sphere-4lights.json", "w"))
 PY
 small=(--width 128 --height 128 --frames 1)
-part=${PART:-all}  # models | errors | time | all
+part=${PART:-all}  # models | conserve | errors | time | all
 # PART=models: the before/after table of docs/BENCHMARKS.md (issue 16): model 0 (the paper's) and
 # model 1 (orders) against the reference on sphere (g 0, 0.7, 0.9), layers and bunny at 64 x 64,
 # multiple term and all terms. Each reference is rendered once into bench/out/ref-<name>-<terms>-64.exr
@@ -60,6 +61,26 @@ if [ "$part" = models ]; then
       --csv "$out/psf-512-model$m.csv"
   done
   echo "done: $out/psf-*-models-*.csv $out/psf-512-model*.csv"
+  exit 0
+fi
+# PART=conserve: model 1's `conserve` against the capped orders (conserve=0) on the models
+# table's references, and on layers of other density contrasts (15: 0.2 / 3, 30: 0.1 / 3) at
+# 32 x 32 (their references rendered once, 4096 samples per pixel). Run PART=models first.
+if [ "$part" = conserve ]; then
+  for name in sphere sphere-g07 sphere-g09 layers bunny; do
+    scene=scenes/$name.json; [ -f "$scene" ] || scene=$out/$name.json
+    $S bench "$scene" --pipeline psf --terms multiple --width 64 --height 64 --frames 1 \
+      --sweep conserve=0,1 --reference "$out/ref-$name-multiple-64.exr" \
+      --csv "$out/psf-$name-conserve.csv"
+  done
+  for c in "15 0.2 3.0" "30 0.1 3.0"; do
+    set -- $c
+    python3 -c "import json,sys; s=json.load(open('scenes/layers.json')); s['medium']['density']['values']=[$2,$3]; json.dump(s, open(sys.argv[1], 'w'))" "$out/layers-c$1.json"
+    $S bench "$out/layers-c$1.json" --pipeline psf --terms multiple --width 32 --height 32 \
+      --frames 1 --sweep conserve=0,1 --reference-spp 4096 \
+      --reference "$out/ref-layers-c$1-multiple-32.exr" --csv "$out/psf-layers-c$1-conserve.csv"
+  done
+  echo "done: $out/psf-*-conserve.csv"
   exit 0
 fi
 # (The sweeps below are model 0's, the paper's march: --set model=0.)

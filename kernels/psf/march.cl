@@ -16,6 +16,7 @@
 // That is `model` 0 (the paper's). `model` 1 (`orders`, pipelines/psf/orders.hpp) reads instead
 // the orders' bands on their coarse grid at every sub-step:
 //   multiple: b * (phi_1 HG(g^2) + phi_2 HG(g^3) + phi_rest HG(g_rest)),  g_rest = G / phi_rest
+// (with `conserve`, b_eff = b (1 - exp(-c dl)) / (c dl), dl = `sat`, as the orders collide)
 // weighted by the view transmittance like the single term, plus (`flux`) the P1 part of the
 // diffusive flux J = -D grad(phi) scattered towards the camera: 3 g D / (4 pi) dphi/dt along the
 // view ray (clamped at zero).
@@ -135,7 +136,7 @@ __kernel void psf_march(float3 origin, float voxel, int nx, int ny, int nz,
                         __global const float* pms, int pms_n, float pms_log_min, float pms_log_max,
                         float theta2, float alpha, float shift, int atten, float spacing,
                         int model, __global const float4* bands, int onx, int ony, int onz,
-                        float ocell, float4 flux, __global float* out) {
+                        float ocell, float4 flux, float sat, __global float* out) {
   int px = get_global_id(0), py = get_global_id(1);
   if (px >= width || py >= height) return;
   Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
@@ -192,7 +193,14 @@ __kernel void psf_march(float3 origin, float voxel, int nx, int ny, int nz,
             prev_t = tm;
             ms = fmax(ms + flux.xyz * deriv, 0.0f);
           }
-          multiple += tr * wint * ss * ms;
+          // `conserve`: the orders' collisions saturate over a cell `sat` (orders.cl:
+          // coarse_collision), and so does the scattering that sends them towards the camera.
+          float3 se = ss;
+          if (sat > 0.0f) {
+            float3 u = st * sat;
+            se = select(ss * (1.0f - exp(-u)) / u, ss * (1.0f - 0.5f * u), isless(u, 1e-4f));
+          }
+          multiple += tr * wint * se * ms;
         } else if (terms & 2) {
           if (tm >= next_lookup) {
             // The weight and the lookup, at the spacing of figure 9; held in between.

@@ -2,7 +2,10 @@
 // scattered light of one light, order by order, on a coarse level of its pyramid
 // (kernels/psf/orders.cl). Each order's light spreads by a Gaussian and drifts along the light
 // by the flight of a persistent random walk (psf_model.hpp: order_flight) with the medium's mean
-// mean free path; light reaching no medium is lost. The march reads the bands (orders 1, 2 and
+// mean free path; light reaching no medium is lost. With `conserve` (the default) each source
+// voxel's light is scaled so that its flight's collisions, weighted by the local extinction, take
+// the share of the flight that stays inside the mesh: dense parts collide more, sparse parts let
+// the light fly further, and no order gains power. The march reads the bands (orders 1, 2 and
 // the rest) and gives each its phase, HG(g^(m+1)) about the light's direction.
 #pragma once
 
@@ -25,6 +28,9 @@ struct OrderParams {
       3;  // Gaussians per flight: 1, or 3 (the exponential flight's shape; flight_mixture)
   double drift = 0.5;  // the share of the flights' drift applied (calibrated_drift)
   bool tail = true;    // sum the orders past a steady decay as a geometric series
+  // Scale each order's source so that its flight's collisions take what stays inside the mesh
+  // (kernels/psf/orders.cl: order_scale) instead of capping b at the albedo times c_mean.
+  bool conserve = true;
 };
 
 // An exponential flight (mean 1, isotropic) as Gaussians: per-axis standard deviations and
@@ -45,6 +51,8 @@ struct Orders {
   int flights = 0;    // the parameters it was built with
   double drift = 0;
   bool tail = false;
+  bool conserve = false;
+  int normalisations = 0;  // conserve: flights whose collisions were normalised (kernels changed)
   double ms = 0;
 };
 
@@ -57,7 +65,9 @@ double calibrated_drift(double g);
 // first flight's spread in the densest channel, unless `params.level` names one.
 int orders_level(const OrderParams& params, float voxel, int levels);
 
-Orders build_orders(gpu::ClContext& cl, const ClMedium& medium, const Pyramid& pyramid,
-                    const cl::Buffer& lights, int light, const OrderParams& params);
+// `occupancy`: one float per voxel of `medium` (its share inside the mesh), read with `conserve`.
+Orders build_orders(gpu::ClContext& cl, const ClMedium& medium, const cl::Buffer& occupancy,
+                    const Pyramid& pyramid, const cl::Buffer& lights, int light,
+                    const OrderParams& params);
 
 }  // namespace scatter::psf

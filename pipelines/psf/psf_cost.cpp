@@ -40,9 +40,10 @@ CostEstimate PsfPipeline::estimate(const Scene& scene, const RenderRequest& requ
     const int level = psf::orders_level(op, static_cast<float>(g.voxel), levels);
     level_voxels = n / std::pow(8.0, level);
     per_light += level_voxels * 16 * 4;
-    transient = std::max(transient, level_voxels * 16 * 6);
+    // The orders' working volumes: 6, and 5 more for conserve's normalisation.
+    transient = std::max(transient, level_voxels * 16 * (s.conserve ? 11 : 6));
   }
-  lights.device("scene.voxels", n * 24, grid + " x 24 B (sigma_s, sigma_t)");
+  lights.device("scene.voxels", n * 28, grid + " x 28 B (sigma_s, sigma_t, occupancy)");
   lights.device("scene.voxels", count * per_light + (count ? transient : 0),
                 std::to_string(count) + " lights x " + grid + " x 66 B (light volumes, pyramids" +
                     (orders ? ", orders)" : ")"));

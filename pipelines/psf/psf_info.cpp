@@ -24,6 +24,10 @@ const SettingsTable<PsfSettings>& psf_settings() {
        setting("flux", &PsfSettings::flux, 0, 2, frame(),
                "model 1: the diffusive flux's P1 part towards the camera, 0 none, 1 with one "
                "flight's D = 1 / (3 c), 2 with diffusion's 1 / (3 c (1 - g))"),
+       flag("conserve", &PsfSettings::conserve, kept("lights"),
+            "model 1: scale each order's source so that its flight's collisions, weighted by "
+            "the local extinction, take what stays inside the mesh (0: cap b at the albedo "
+            "times the mean extinction instead)"),
        flag("tail", &PsfSettings::tail, kept("lights"),
             "model 1: sum the orders past a steady decay as a geometric series"),
        setting("step", &PsfSettings::step, 0.05, 4, frame(),

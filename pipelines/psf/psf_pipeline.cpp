@@ -29,6 +29,7 @@ void PsfPipeline::prepare(const Scene& scene) {
   gpu::ClContext& cl = gpu_.cl();
   medium_.lights.clear();
   medium_.cl = std::make_unique<ClMedium>(upload_medium(cl, grid));
+  medium_.occupancy = upload(cl, grid.occupancy);
   medium_.fingerprint = fp;
   medium_.density = scene.medium.density;
   float max_s = 0;
@@ -63,10 +64,11 @@ std::vector<std::string> PsfPipeline::light_keys(const Scene& scene) const {
 
 void PsfPipeline::check_memory(const Scene& scene) {
   // Per light: three float4 volumes and the pyramid (1 + 1/8 + ... < 8/7 of a volume); the medium:
-  // sigma_s and sigma_t (RGB floats). The grid has at most (voxels + 2)^3 voxels.
+  // sigma_s and sigma_t (RGB floats) and the occupancy (a float). The grid has at most
+  // (voxels + 2)^3 voxels.
   const double n = std::pow(double(scene.voxels) + 2, 3);
   const double per_light = n * 16 * (3 + 8.0 / 7), pyramid = n * 16 * 8.0 / 7;
-  const double need = per_light * std::max<size_t>(scene.lights.size(), 1) + n * 24;
+  const double need = per_light * std::max<size_t>(scene.lights.size(), 1) + n * 28;
   const gpu::ClDeviceInfo& info = gpu_.cl().info();
   const double have = 0.75 * double(info.global_memory);
   auto mib = [](double b) {
@@ -109,8 +111,11 @@ Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, co
       {"orders", orders && changed > 0,
        !need_pyramid ? "the multiple term is not rendered"
        : !orders     ? "model 0 (the paper's): the march reads the pyramid at one path length"
-       : changed ? lights + ": the scattering orders on a coarse pyramid level, each spread and "
-                            "drifted by its flight (model 1, orders)"
+       : changed     ? lights +
+                       ": the scattering orders on a coarse pyramid level, each spread and "
+                       "drifted by its flight (model 1, orders" +
+                       (s.conserve ? std::string(", each flight's collisions conserved)")
+                                   : std::string(", b capped at the albedo x mean c)"))
                  : "every light's orders are reused (camera-only change)"});
   p.stages.push_back({"march_single", request.terms != Terms::Multiple,
                       request.terms == Terms::Multiple ? "single term not requested"
@@ -205,16 +210,18 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
                         .level = s.level,
                         .flights = s.flights,
                         .drift = s.drift >= 0 ? s.drift : psf::calibrated_drift(scene.medium.g),
-                        .tail = s.tail};
+                        .tail = s.tail,
+                        .conserve = s.conserve};
     for (size_t i = 0; i < keys.size(); ++i) {
       const psf::LightVolume& v = medium_.lights.at(keys[i]);
       const int level = psf::orders_level(op, m.voxel, static_cast<int>(v.pyramid.layout.size()));
       auto it = medium_.orders.find(keys[i]);
       if (it != medium_.orders.end() && it->second.level == level &&
           it->second.flights == s.flights && it->second.tail == s.tail &&
-          it->second.drift == op.drift)
+          it->second.drift == op.drift && it->second.conserve == s.conserve)
         continue;
-      psf::Orders o = psf::build_orders(cl, m, v.pyramid, lights, static_cast<int>(i), op);
+      psf::Orders o =
+          psf::build_orders(cl, m, medium_.occupancy, v.pyramid, lights, static_cast<int>(i), op);
       orders_ms += o.ms;
       medium_.orders.insert_or_assign(keys[i], std::move(o));
     }
@@ -247,15 +254,15 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
     const psf::LightVolume& v = medium_.lights.at(keys[i]);
     const bool orders = s.model == 1 && (terms & 2);
     const psf::Orders* o = orders ? &medium_.orders.at(keys[i]) : nullptr;
-    gpu::set_args(k, m.origin, m.voxel, m.nx, m.ny, m.nz, m.sigma_s, m.sigma_t, lights,
-                  static_cast<int>(i), g, camera, w, h, static_cast<float>(s.step), terms, v.l0,
-                  v.path, v.tau, v.pyramid.data, v.pyramid.levels, v.pyramid.widths,
-                  static_cast<int>(v.pyramid.layout.size()), medium_.pms_buf,
-                  static_cast<int>(medium_.pms.inv_norm.size()),
-                  static_cast<float>(medium_.pms.log_min), static_cast<float>(medium_.pms.log_max),
-                  theta2, alpha, static_cast<float>(s.shift), s.atten,
-                  static_cast<float>(s.spacing), orders ? 1 : 0, o ? o->bands : v.pyramid.data,
-                  o ? o->nx : 1, o ? o->ny : 1, o ? o->nz : 1, o ? o->cell : 1.f, flux, out);
+    gpu::set_args(
+        k, m.origin, m.voxel, m.nx, m.ny, m.nz, m.sigma_s, m.sigma_t, lights, static_cast<int>(i),
+        g, camera, w, h, static_cast<float>(s.step), terms, v.l0, v.path, v.tau, v.pyramid.data,
+        v.pyramid.levels, v.pyramid.widths, static_cast<int>(v.pyramid.layout.size()),
+        medium_.pms_buf, static_cast<int>(medium_.pms.inv_norm.size()),
+        static_cast<float>(medium_.pms.log_min), static_cast<float>(medium_.pms.log_max), theta2,
+        alpha, static_cast<float>(s.shift), s.atten, static_cast<float>(s.spacing), orders ? 1 : 0,
+        o ? o->bands : v.pyramid.data, o ? o->nx : 1, o ? o->ny : 1, o ? o->nz : 1,
+        o ? o->cell : 1.f, flux, o && o->conserve ? o->cell : 0.f, out);
     queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
     if (request.progress) {
       queue.finish();

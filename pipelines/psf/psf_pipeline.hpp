@@ -30,6 +30,7 @@ struct PsfSettings {
   int level = -1;
   int flights = 3;
   bool tail = true;
+  bool conserve = true;
   int flux = 0;
   double drift = -1;  // -1: psf::calibrated_drift(g)
   double step = 1;
@@ -61,6 +62,7 @@ class PsfPipeline : public Pipeline {
     std::string fingerprint;
     std::shared_ptr<const DensityField> density;  // keeps the fingerprinted address taken
     std::unique_ptr<ClMedium> cl;
+    cl::Buffer occupancy;  // float per voxel: its share inside the mesh (model 1's conserve)
     std::map<std::string, psf::LightVolume> lights;  // by the light's packed parameters
     std::map<std::string, psf::Orders> orders;       // model 1's, by the same keys
     std::array<double, 3> mean_sigma_t{};            // c over the medium's voxels

@@ -1,6 +1,6 @@
 // The PSF model's formulas against the paper's limiting cases and independent quadratures, and the
 // light pyramid (kernels/psf/pyramid.cl) against a CPU computation of the same operations and
-// against a direct 3D Gaussian convolution; the orders (kernels/psf/orders.cl) against the CPU.
+// against a direct 3D Gaussian convolution (the orders' kernels: orders_test.cpp).
 #include "pipelines/psf/psf_model.hpp"
 
 #include <gtest/gtest.h>
@@ -14,10 +14,14 @@
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/psf/light_pyramid.hpp"
 #include "pipelines/psf/orders.hpp"
+#include "psf_volumes.hpp"
 #include "scene/scene.hpp"
 
 namespace scatter::psf {
 namespace {
+
+using test_volumes::random_volume;
+using test_volumes::upload4;
 
 constexpr double kPi = std::numbers::pi;
 
@@ -193,23 +197,6 @@ TEST(PsfModel, LevelWidthsAddUp) {
   }
 }
 
-Volume3 random_volume(int nx, int ny, int nz, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0, 1);
-  Volume3 v{nx, ny, nz, {}};
-  v.rgb.resize(size_t(nx) * ny * nz * 3);
-  for (float& x : v.rgb) x = u(rng);
-  return v;
-}
-
-cl::Buffer upload4(gpu::ClContext& cl, const Volume3& v) {
-  std::vector<cl_float4> d(v.rgb.size() / 3);
-  for (size_t i = 0; i < d.size(); ++i)
-    d[i] = cl_float4{{v.rgb[3 * i], v.rgb[3 * i + 1], v.rgb[3 * i + 2], 0}};
-  return cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                    d.size() * sizeof(cl_float4), d.data());
-}
-
 Volume3 level_of(gpu::ClContext& cl, const Pyramid& p, size_t k) {
   const cl_int4& L = p.layout[k];
   Volume3 v{L.s[1], L.s[2], L.s[3], {}};
@@ -234,63 +221,6 @@ TEST(PsfPyramid, KernelsMatchTheCpuOperations) {
       ASSERT_NEAR(gpu.rgb[i], cpu.rgb[i], 1e-5) << "level " << k;
     EXPECT_NEAR(p.width[k], 0.1 * level_width(static_cast<int>(k)), 1e-6);
   }
-}
-
-TEST(PsfOrders, KernelsMatchTheCpuOrders) {
-  // g = 0 (no drift), level 0, one Gaussian per flight: order m's fluence is the source blurred by
-  // its flight's Gaussian (per channel: c differs) over c, and the next source is b times it.
-  auto& cl = test::shared_gpu().cl();
-  const int n = 20;
-  Volume3 src = random_volume(n, n, n, 5), b = random_volume(n, n, n, 9);
-  ClMedium m;
-  m.nx = m.ny = m.nz = n;
-  m.voxel = 0.1f;
-  m.origin = cl_float3{{-1, -1, -1}};
-  m.sigma_s = upload(cl, b.rgb);
-  std::vector<float> t = b.rgb;  // albedo 0.9: b stays below 0.9 c_mean, uncapped
-  for (float& x : t) x /= 0.9f;
-  m.sigma_t = upload(cl, t);
-  Light sun;
-  sun.type = Light::Type::Directional;
-  cl::Buffer lights = upload(cl, pack_lights({sun}));
-  Pyramid p = build_pyramid(cl, upload4(cl, src), n, n, n, m.voxel);
-  OrderParams params{.g = 0,
-                     .mean_sigma_t = {2.0, 2.5, 3.0},
-                     .level = 0,
-                     .tolerance = 0,
-                     .max_orders = 5,
-                     .flights = 1};
-  Orders o = build_orders(cl, m, p, lights, 0, params);
-  ASSERT_EQ(o.count, 5);
-  ASSERT_EQ(o.nx, n);
-  std::vector<cl_float4> bands(size_t(n) * n * n * 4);
-  cl.queue().enqueueReadBuffer(o.bands, CL_TRUE, 0, bands.size() * sizeof(cl_float4), bands.data());
-  Volume3 q = src;
-  std::vector<Volume3> cpu(3, Volume3{n, n, n, std::vector<float>(src.rgb.size(), 0.f)});
-  for (int order = 1; order <= 5; ++order) {
-    Volume3 phi = q;
-    for (int c = 0; c < 3; ++c) {
-      const double st = params.mean_sigma_t[c];
-      Volume3 blurred = blur_gaussian(q, std::sqrt(order_flight(0, order).variance) / st / m.voxel);
-      for (size_t i = c; i < phi.rgb.size(); i += 3)
-        phi.rgb[i] = static_cast<float>(blurred.rgb[i] / st);
-    }
-    Volume3& band = cpu[std::min(order - 1, 2)];
-    for (size_t i = 0; i < phi.rgb.size(); ++i) {
-      band.rgb[i] += phi.rgb[i];
-      q.rgb[i] = b.rgb[i] * phi.rgb[i];
-    }
-  }
-  double worst = 0;
-  for (size_t v = 0; v < size_t(n) * n * n; ++v)
-    for (int j = 0; j < 3; ++j)
-      for (int c = 0; c < 3; ++c) {
-        const double want = cpu[j].rgb[3 * v + c];
-        worst = std::max(worst, std::fabs(bands[4 * v + j].s[c] - want) / (std::fabs(want) + 1e-3));
-      }
-  EXPECT_LT(worst, 1e-4);
-  for (size_t v = 0; v < size_t(n) * n * n; ++v)
-    ASSERT_EQ(bands[4 * v + 3].s[0], 0.f);  // g^(m+1) = 0
 }
 
 // Trilinear reconstruction of level k at the source's voxel centres (as kernels/psf/march.cl).

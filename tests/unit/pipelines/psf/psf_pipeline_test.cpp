@@ -92,12 +92,35 @@ TEST(PsfPipeline, SphereMultipleTermIsNearTheReference) {
   PsfPipeline p(test::shared_gpu());
   RenderResult orders = p.render(s, {Terms::Multiple, {}});
   EXPECT_NE(orders.plan.stages[3].reason.find("model 1"), std::string::npos);
+  EXPECT_NE(orders.plan.stages[3].reason.find("collisions conserved"), std::string::npos);
   for (float x : orders.image.rgb) ASSERT_TRUE(std::isfinite(x) && x >= 0.f);
   const double error = relative_rmse(orders.image, ref.image, mask);
   std::printf("orders: relative RMSE %.4f\n", error);
   EXPECT_LT(error, 0.15);  // measured 0.091 (24^2 pixels, 32 voxels)
   Image paper = p.render(s, {Terms::Multiple, {{"model", 0}}}).image;
   EXPECT_GT(relative_rmse(paper, ref.image, mask), 0.3);
+  // A homogeneous medium: conserve's scale is one but where the coarse cells and the mesh part.
+  Image capped = p.render(s, {Terms::Multiple, {{"conserve", 0}}}).image;
+  EXPECT_LT(relative_rmse(capped, orders.image, mask), 0.01);
+}
+
+TEST(PsfPipeline, LayersMultipleTermIsNearTheReference) {
+  // Thin dense and sparse layers (b 4 and 0.4): conserve lets the sparse layers carry the light
+  // that the capped orders lost there.
+  Scene s = load_scene(test::source_path("scenes/layers.json"));
+  s.width = s.height = 24;
+  s.voxels = 32;
+  RenderResult ref =
+      make_pipeline("reference", test::shared_gpu())->render(s, {Terms::Multiple, {{"spp", 2048}}});
+  auto mask = coverage_mask(s, voxelize(s, {.resolution = s.voxels}));
+  EXPECT_LT(relative_norm(*ref.std_error, ref.image, mask), 0.05);
+  PsfPipeline p(test::shared_gpu());
+  const double conserve = relative_rmse(p.render(s, {Terms::Multiple, {}}).image, ref.image, mask);
+  const double capped =
+      relative_rmse(p.render(s, {Terms::Multiple, {{"conserve", 0}}}).image, ref.image, mask);
+  std::printf("layers: relative RMSE conserve %.4f, capped %.4f\n", conserve, capped);
+  EXPECT_LT(conserve, 0.25);
+  EXPECT_LT(conserve, capped - 0.05);
 }
 
 TEST(PsfPipeline, MultipleTermIsFiniteAndNonNegativeOnInhomogeneousScenes) {
