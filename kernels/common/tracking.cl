@@ -14,6 +14,17 @@
 
 // ---- Tracking in the voxel medium with per-brick majorants -----------------------------------
 
+// The voxel medium as the trackers read it: the grid, the voxels' coefficients (RGB interleaved),
+// per brick the majorant and the index of a voxel whose coefficients the whole brick shares (-1
+// when they differ: pipelines/reference/inside_grid.hpp, uniform_bricks).
+typedef struct {
+  Grid g;
+  __global const float* sigma_s;
+  __global const float* sigma_t;
+  __global const float* majorant;
+  __global const int* uniform;
+} Medium;
+
 float3 voxel_sigma3(const Grid* g, __global const float* sigma, int3 c) {
   if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= g->nx || c.y >= g->ny || c.z >= g->nz)
     return (float3)(0.0f);
@@ -22,6 +33,8 @@ float3 voxel_sigma3(const Grid* g, __global const float* sigma, int3 c) {
 }
 
 float max3(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
+
+int brick_index(const Grid* g, int3 c) { return (c.z * g->by + c.y) * g->bx + c.x; }
 
 // Starts a walk over the bricks crossed by o + t d, t < tmax; false if the ray misses the grid.
 bool brick_walk(const Grid* g, float3 o, float3 d, float tmax, Dda* s) {
@@ -66,40 +79,58 @@ bool spectral_collide(float m, float3 ss, float3 st, float3* w, Rng* r) {
   return false;
 }
 
+// Tentative collisions at rate m over [a, b] in a stretch of constant coefficients ss, st.
+bool track_constant(float m, float3 ss, float3 st, float a, float b, float3* w, Rng* r,
+                    float* t_hit) {
+  for (float t = next_tentative(a, m, b, r); t < b; t = next_tentative(t, m, b, r))
+    if (spectral_collide(m, ss, st, w, r)) {
+      *t_hit = t;
+      return true;
+    }
+  return false;
+}
+
 // Spectral delta tracking: the first real collision along o + t d, t < tmax; *w takes the
-// collisions' weights (header). Empty bricks are stepped over; within a brick, tentative
-// collisions are drawn at the brick's majorant or (walk_voxels) at each voxel's largest sigma_t.
-bool delta_track(const Grid* g, __global const float* sigma_s, __global const float* sigma_t,
-                 __global const float* majorant, float3 o, float3 d, float tmax, float3* w,
-                 Rng* r, float* t_hit) {
+// collisions' weights (header). Empty bricks are stepped over; a uniform brick draws its
+// tentative collisions at its own largest sigma_t; within other bricks they are drawn at the
+// brick's majorant or (walk_voxels) at each voxel's largest sigma_t.
+bool delta_track(const Medium* md, float3 o, float3 d, float tmax, float3* w, Rng* r,
+                 float* t_hit) {
+  const Grid* g = &md->g;
   Dda s;
   if (!brick_walk(g, o, d, tmax, &s)) return false;
   float a, b;
   int3 c;
   while (dda_next(&s, &a, &b, &c)) {
-    float m = majorant[(c.z * g->by + c.y) * g->bx + c.x];
+    int bi = brick_index(g, c);
+    float m = md->majorant[bi];
     if (m <= 0.0f) continue;
+    int u = md->uniform[bi];
+    if (u >= 0) {
+      float3 st = vload3(u, md->sigma_t);
+      float mu = max3(st);
+      if (mu > 0.0f && track_constant(mu, vload3(u, md->sigma_s), st, a, b, w, r, t_hit))
+        return true;
+      continue;
+    }
     if (walk_voxels(g, m, a, b)) {
       Dda v;
       dda_init(&v, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), a, b);
       float va, vb;
       int3 vc;
       while (dda_next(&v, &va, &vb, &vc)) {
-        float3 st = voxel_sigma3(g, sigma_t, vc);
+        float3 st = voxel_sigma3(g, md->sigma_t, vc);
         float mv = max3(st);
         if (mv <= 0.0f) continue;
-        float3 ss = voxel_sigma3(g, sigma_s, vc);
-        for (float t = next_tentative(va, mv, vb, r); t < vb; t = next_tentative(t, mv, vb, r))
-          if (spectral_collide(mv, ss, st, w, r)) {
-            *t_hit = t;
-            return true;
-          }
+        if (track_constant(mv, voxel_sigma3(g, md->sigma_s, vc), st, va, vb, w, r, t_hit))
+          return true;
       }
       continue;
     }
     for (float t = next_tentative(a, m, b, r); t < b; t = next_tentative(t, m, b, r)) {
       int3 vc = voxel_of(g, o + d * t);
-      if (spectral_collide(m, voxel_sigma3(g, sigma_s, vc), voxel_sigma3(g, sigma_t, vc), w, r)) {
+      if (spectral_collide(m, voxel_sigma3(g, md->sigma_s, vc), voxel_sigma3(g, md->sigma_t, vc),
+                           w, r)) {
         *t_hit = t;
         return true;
       }
@@ -108,24 +139,35 @@ bool delta_track(const Grid* g, __global const float* sigma_s, __global const fl
   return false;
 }
 
+// The three channels' optical depth along o + t d, t in [a, b] inside brick c (not empty).
+float3 brick_depth(const Medium* md, int bi, float3 o, float3 d, float a, float b) {
+  const Grid* g = &md->g;
+  int u = md->uniform[bi];
+  if (u >= 0) return vload3(u, md->sigma_t) * (b - a);
+  Dda v;
+  dda_init(&v, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), a, b);
+  float va, vb;
+  int3 vc;
+  float3 tau = (float3)(0.0f);
+  while (dda_next(&v, &va, &vb, &vc)) tau += voxel_sigma3(g, md->sigma_t, vc) * (vb - va);
+  return tau;
+}
+
 // The exact transmittance of the three channels along o + t d, t in [0, tmax]: the optical depth
-// summed voxel by voxel (each voxel is constant), walking only the bricks that hold any medium. No
-// randomness: a shadow ray's transmittance without the variance of ratio tracking, whose estimate
-// where the majorant is tight (a homogeneous medium) is 0 or 1.
-float3 exact_transmittance(const Grid* g, __global const float* sigma_t,
-                           __global const float* majorant, float3 o, float3 d, float tmax) {
+// summed voxel by voxel (each voxel is constant; a uniform brick at once), walking only the
+// bricks that hold any medium. No randomness: a shadow ray's transmittance without the variance
+// of ratio tracking, whose estimate where the majorant is tight (a homogeneous medium) is 0 or 1.
+float3 exact_transmittance(const Medium* md, float3 o, float3 d, float tmax) {
+  const Grid* g = &md->g;
   Dda s;
   if (!brick_walk(g, o, d, tmax, &s)) return (float3)(1.0f);
   float3 tau = (float3)(0.0f);
   float a, b;
   int3 c;
   while (dda_next(&s, &a, &b, &c)) {
-    if (majorant[(c.z * g->by + c.y) * g->bx + c.x] <= 0.0f) continue;
-    Dda v;
-    dda_init(&v, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), a, b);
-    float va, vb;
-    int3 vc;
-    while (dda_next(&v, &va, &vb, &vc)) tau += voxel_sigma3(g, sigma_t, vc) * (vb - va);
+    int bi = brick_index(g, c);
+    if (md->majorant[bi] <= 0.0f) continue;
+    tau += brick_depth(md, bi, o, d, a, b);
     if (max3(-tau) < -80.0f) return (float3)(0.0f);  // below float32's range in every channel
   }
   return exp(-tau);
@@ -133,29 +175,25 @@ float3 exact_transmittance(const Grid* g, __global const float* sigma_t,
 
 // Ratio tracking of the three channels at once: an unbiased estimate of each channel's
 // transmittance along o + t d, t in [0, tmax], with Russian roulette once the largest is small so
-// dense media end early. A brick walked voxel by voxel (walk_voxels) contributes its exact
-// transmittance.
-float3 ratio_track(const Grid* g, __global const float* sigma_t, __global const float* majorant,
-                   float3 o, float3 d, float tmax, Rng* r) {
+// dense media end early. A brick walked voxel by voxel (walk_voxels) or uniform contributes its
+// exact transmittance.
+float3 ratio_track(const Medium* md, float3 o, float3 d, float tmax, Rng* r) {
+  const Grid* g = &md->g;
   Dda s;
   float3 tr = (float3)(1.0f);
   if (!brick_walk(g, o, d, tmax, &s)) return tr;
   float a, b;
   int3 c;
   while (dda_next(&s, &a, &b, &c)) {
-    float m = majorant[(c.z * g->by + c.y) * g->bx + c.x];
+    int bi = brick_index(g, c);
+    float m = md->majorant[bi];
     if (m <= 0.0f) continue;
-    if (walk_voxels(g, m, a, b)) {
-      Dda v;
-      dda_init(&v, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), a, b);
-      float va, vb;
-      float3 tau = (float3)(0.0f);
-      int3 vc;
-      while (dda_next(&v, &va, &vb, &vc)) tau += voxel_sigma3(g, sigma_t, vc) * (vb - va);
-      tr *= exp(-tau);
+    if (md->uniform[bi] >= 0 || walk_voxels(g, m, a, b)) {
+      tr *= exp(-brick_depth(md, bi, o, d, a, b));
     } else {
       for (float t = next_tentative(a, m, b, r); t < b; t = next_tentative(t, m, b, r))
-        tr *= fmax(1.0f - voxel_sigma3(g, sigma_t, voxel_of(g, o + d * t)) / m, (float3)(0.0f));
+        tr *= fmax(1.0f - voxel_sigma3(g, md->sigma_t, voxel_of(g, o + d * t)) / m,
+                   (float3)(0.0f));
     }
     float top = max3(tr);
     if (top < 0.01f) {

@@ -34,8 +34,11 @@ float box_entry(__global const float* b, float3 o, float3 inv, float t0, float t
 
 // Closest intersection with t in (t0, t1): its distance and the triangle's unit normal (outward
 // for a mesh wound counter-clockwise seen from outside, as scene meshes are). Children are
-// visited nearer first, and a box entered past the closest hit so far is skipped.
-bool mesh_hit(Bvh bvh, float3 o, float3 d, float t0, float t1, float* t_hit, float3* normal) {
+// visited nearer first, and a box entered past the closest hit so far is skipped. `first`: the
+// first intersection found ends the search, for a ray that crosses the mesh once in (t0, t1)
+// (from inside a convex mesh), where the first found is the closest.
+bool mesh_search(Bvh bvh, float3 o, float3 d, float t0, float t1, bool first, float* t_hit,
+                 float3* normal) {
   float3 inv = 1.0f / d;
   int stack[64];
   float entry[64];
@@ -92,11 +95,24 @@ bool mesh_hit(Bvh bvh, float3 o, float3 d, float t0, float t1, float* t_hit, flo
         best = th;
         *normal = normalize(cross(e1, e2));
         found = true;
+        if (first) {
+          *t_hit = best;
+          return true;
+        }
       }
     }
   }
   *t_hit = best;
   return found;
+}
+
+bool mesh_hit(Bvh bvh, float3 o, float3 d, float t0, float t1, float* t_hit, float3* normal) {
+  return mesh_search(bvh, o, d, t0, t1, false, t_hit, normal);
+}
+
+// The crossing of a ray from inside a convex mesh: the only one ahead, so the first found.
+bool mesh_exit(Bvh bvh, float3 o, float3 d, float t0, float t1, float* t_hit, float3* normal) {
+  return mesh_search(bvh, o, d, t0, t1, true, t_hit, normal);
 }
 
 float3 reflect_dir(float3 d, float3 n) { return d - 2.0f * dot(d, n) * n; }
@@ -124,9 +140,8 @@ float interior_distance(const Grid* g, __global const uchar* interior, float3 p)
 // leaves is the last. With no crossing at all, the
 // segment is inside only towards a point light (one inside the mesh); towards a directional
 // light the point was outside after rounding.
-float3 shadow_transmittance(const Grid* g, __global const float* sigma_t,
-                            __global const float* majorant, Bvh bvh, float ior, bool convex,
-                            float3 o, float3 d, float dist, Rng* r) {
+float3 shadow_transmittance(const Medium* md, Bvh bvh, float ior, bool convex, float3 o, float3 d,
+                            float dist, Rng* r) {
   float3 tr = (float3)(1.0f);
   float t0 = 0.0f;
   bool any = false;
@@ -135,12 +150,16 @@ float3 shadow_transmittance(const Grid* g, __global const float* sigma_t,
     float3 n;
     // The first search starts at the point itself (a crossing right next to it still counts);
     // later ones step past the crossing just found.
-    if (!mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + surface_eps(bvh, o + d * t0), dist, &t, &n)) {
-      if (!any && !isinf(dist)) tr *= exact_transmittance(g, sigma_t, majorant, o, d, dist);
+    // From inside a convex mesh the first crossing is the only one: any found is it.
+    bool hit = k == 0 && convex ? mesh_exit(bvh, o, d, 0.0f, dist, &t, &n)
+                                : mesh_hit(bvh, o, d, k == 0 ? 0.0f : t0 + surface_eps(bvh, o + d * t0),
+                                           dist, &t, &n);
+    if (!hit) {
+      if (!any && !isinf(dist)) tr *= exact_transmittance(md, o, d, dist);
       return tr;
     }
     float c = dot(d, n);  // > 0: leaving the medium, so [t0, t] was inside
-    if (c > 0.0f && t > t0) tr *= exact_transmittance(g, sigma_t, majorant, o + d * t0, d, t - t0);
+    if (c > 0.0f && t > t0) tr *= exact_transmittance(md, o + d * t0, d, t - t0);
     if (ior != 1.0f) {
       float cos_t;
       tr *= 1.0f - fresnel(fabs(c), c > 0.0f ? ior : 1.0f / ior, &cos_t);
@@ -153,7 +172,7 @@ float3 shadow_transmittance(const Grid* g, __global const float* sigma_t,
       float t2;
       float3 n2;
       if (!mesh_hit(bvh, o, d, t0 + surface_eps(bvh, o + d * t0), dist, &t2, &n2)) {
-        tr *= exact_transmittance(g, sigma_t, majorant, o + d * t0, d, dist - t0);
+        tr *= exact_transmittance(md, o + d * t0, d, dist - t0);
         return tr;
       }
     }

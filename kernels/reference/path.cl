@@ -22,9 +22,9 @@ float3 light_irradiance3(Light L, float3 x, float3* wl, float* dist) {
 }
 
 // Light arriving at x and scattered into -d, per channel: sum over the lights.
-float3 next_event(const Grid* g, __global const float* sigma_t, __global const float* majorant,
-                  __global const float* lights, int light_count, float g_phase, float3 x, float3 d,
-                  Bvh bvh, float ior, bool use_mesh, bool convex, float interior, Rng* r) {
+float3 next_event(const Medium* md, __global const float* lights, int light_count, float g_phase,
+                  float3 x, float3 d, Bvh bvh, float ior, bool use_mesh, bool convex,
+                  float interior, Rng* r) {
   float3 sum = (float3)(0.0f);
   for (int l = 0; l < light_count; ++l) {
     float3 wl;
@@ -32,14 +32,13 @@ float3 next_event(const Grid* g, __global const float* sigma_t, __global const f
     float3 e = light_irradiance3(load_light(lights, l), x, &wl, &dist);
     if (max3(e) <= 0.0f) continue;
     if (!use_mesh) {
-      e *= exact_transmittance(g, sigma_t, majorant, x, wl, dist);
+      e *= exact_transmittance(md, x, wl, dist);
     } else {
       // Within `interior` of x there is no boundary: track that far without the mesh.
       float s = fmin(interior, dist);
-      if (s > 0.0f) e *= exact_transmittance(g, sigma_t, majorant, x, wl, s);
+      if (s > 0.0f) e *= exact_transmittance(md, x, wl, s);
       if (s < dist && max3(e) > 0.0f)
-        e *= shadow_transmittance(g, sigma_t, majorant, bvh, ior, convex, x + wl * s, wl,
-                                  dist - s, r);
+        e *= shadow_transmittance(md, bvh, ior, convex, x + wl * s, wl, dist - s, r);
     }
     if (max3(e) <= 0.0f) continue;
     sum += e * hg_phase(dot(wl, d), g_phase);
@@ -50,7 +49,7 @@ float3 next_event(const Grid* g, __global const float* sigma_t, __global const f
 __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int brick, int bx,
                          int by, int bz, __global const float* sigma_s,
                          __global const float* sigma_t, __global const float* majorant,
-                         __global const float* lights, int light_count, float g_phase,
+                         __global const int* uniform, __global const float* lights, int light_count, float g_phase,
                          __global const float* camera, int width, int height, int terms,
                          int spp, int first_sample, uint seed, int max_depth, float ior,
                          int use_mesh, int convex, __global const uchar* interior,
@@ -59,11 +58,24 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
                          __global float* sum_sq) {
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
-  Grid g = make_grid(origin, voxel, nx, ny, nz, brick, bx, by, bz);
+  Medium md = {make_grid(origin, voxel, nx, ny, nz, brick, bx, by, bz), sigma_s, sigma_t, majorant,
+               uniform};
+  const Grid* g = &md.g;
   Bvh bvh = {bvh_bounds, bvh_links, bvh_tris, 1e-3f * voxel};
   Cam cam = load_camera(camera);
   float3 d0 = camera_ray(cam, x, y, width, height, 0.5f, 0.5f);
   float3 acc = (float3)(0.0f), acc2 = (float3)(0.0f);
+  // Every sample's view ray is the pixel centre's: its first crossing and, index matched (the
+  // ray goes on unchanged), the one after it are found once for all samples.
+  float view_t[2] = {INFINITY, INFINITY};
+  float3 view_n[2] = {(float3)(0.0f), (float3)(0.0f)};
+  bool view_hit[2] = {false, false};
+  if (use_mesh) {
+    view_hit[0] = mesh_hit(bvh, cam.position, d0, 0.0f, INFINITY, &view_t[0], &view_n[0]);
+    float3 p = cam.position + d0 * view_t[0];
+    if (view_hit[0] && ior == 1.0f)
+      view_hit[1] = mesh_hit(bvh, p, d0, surface_eps(bvh, p), INFINITY, &view_t[1], &view_n[1]);
+  }
   for (int s = 0; s < spp; ++s) {
     int sample = first_sample + s;
     Rng r = rng_seed((uint)(y * width + x), (uint)sample, seed);
@@ -75,21 +87,33 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
     for (int events = 0; events < 4 * max_depth + 64; ++events) {
       float t_surface = INFINITY, t;
       float3 n;
-      bool hit = false, inside = true;
-      // Within `safe` the flight needs no mesh; past it, the flight goes on from there.
-      bool collided = safe > 0.0f &&
-                      delta_track(&g, sigma_s, sigma_t, majorant, o, d, safe, &weight, &r, &t);
-      if (!collided) {
+      bool hit = false, inside = true, collided = false;
+      // Within `safe` the flight needs no mesh. A free flight is memoryless: past it, it goes on
+      // from there, again without the mesh as far as the distance field there allows.
+      while (safe > 0.0f) {
+        collided = delta_track(&md, o, d, safe, &weight, &r, &t);
+        if (collided) break;
         o = o + d * safe;
+        safe = interior_distance(g, interior, o);
+      }
+      if (!collided) {
         // From a point in the volume any crossing counts (tmin 0); after a surface event the
         // path leaves from the crossing itself and skips surface_eps of search. Without the mesh
-        // (voxel_boundary, index matched) the medium is the grid alone.
-        hit = use_mesh && mesh_hit(bvh, o, d, tmin, INFINITY, &t_surface, &n);
+        // (voxel_boundary, index matched) the medium is the grid alone. From a collision inside
+        // a convex mesh the crossing ahead is the only one (mesh_exit).
+        if (depth == 0 && (events == 0 || (events == 1 && ior == 1.0f))) {
+          hit = view_hit[events];  // still on the view ray (above)
+          t_surface = view_t[events];
+          n = view_n[events];
+        } else {
+          hit = use_mesh && (convex && depth > 0 && tmin == 0.0f
+                                 ? mesh_exit(bvh, o, d, 0.0f, INFINITY, &t_surface, &n)
+                                 : mesh_hit(bvh, o, d, tmin, INFINITY, &t_surface, &n));
+        }
         if (use_mesh && !hit) break;  // a ray with no crossing ahead is outside the mesh
         // Inside iff the crossing ahead leaves the mesh.
         inside = !use_mesh || dot(d, n) > 0.0f;
-        collided = inside && delta_track(&g, sigma_s, sigma_t, majorant, o, d, t_surface,
-                                         &weight, &r, &t);
+        collided = inside && delta_track(&md, o, d, t_surface, &weight, &r, &t);
       }
       safe = 0.0f;
       tmin = 0.0f;
@@ -97,11 +121,11 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
         // A real collision (weights already scaled by the albedo): add light scattered here,
         // scatter on.
         o = o + d * t;
-        if (use_mesh) safe = interior_distance(&g, interior, o);
+        if (use_mesh) safe = interior_distance(g, interior, o);
         if (max3(weight) <= 0.0f || ++depth > max_depth) break;
         if ((depth == 1 && (terms & 1)) || (depth > 1 && (terms & 2)))
-          value += weight * next_event(&g, sigma_t, majorant, lights, light_count, g_phase, o, d,
-                                       bvh, ior, use_mesh, convex, safe, &r);
+          value += weight * next_event(&md, lights, light_count, g_phase, o, d, bvh, ior,
+                                       use_mesh, convex, safe, &r);
         if (!(terms & 2)) break;  // single scattering only: the path ends at its first vertex
         d = hg_sample(d, g_phase, &r);
         float top = max3(weight);

@@ -1,6 +1,7 @@
 #include "pipelines/reference/inside_grid.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace scatter {
@@ -81,6 +82,58 @@ std::vector<uint8_t> interior_depth(const VoxelGrid& grid) {
   std::vector<uint8_t> out(d.size());
   // Less one more: a sliver of surface the supersampling missed may sit in a voxel counted full.
   for (size_t v = 0; v < d.size(); ++v) out[v] = uint8_t(std::clamp(d[v] - 2, 0, 255));
+  return out;
+}
+
+}  // namespace scatter
+
+namespace scatter {
+namespace {
+
+// Whether a segment inside the mesh may cross voxel (i, j, k): the voxel or a neighbour holds
+// part of the mesh's inside.
+bool reachable(const VoxelGrid& grid, int i, int j, int k) {
+  for (int dk = -1; dk <= 1; ++dk)
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di) {
+        int x = i + di, y = j + dj, z = k + dk;
+        if (x < 0 || y < 0 || z < 0 || x >= grid.nx || y >= grid.ny || z >= grid.nz) continue;
+        if (grid.occupancy[grid.index(x, y, z)] > 0) return true;
+      }
+  return false;
+}
+
+// Equal to float32's rounding: restrict_to_mesh's mean over a voxel's part inside (sigma times
+// occupancy, over occupancy) is the medium's own sigma to within an ulp or two.
+bool close(float a, float b) {
+  return std::abs(a - b) <= 1e-6f * std::max(std::abs(a), std::abs(b));
+}
+
+}  // namespace
+
+std::vector<int32_t> uniform_bricks(const VoxelGrid& grid, int brick, bool mesh_bounds) {
+  const int bx = (grid.nx + brick - 1) / brick, by = (grid.ny + brick - 1) / brick,
+            bz = (grid.nz + brick - 1) / brick;
+  std::vector<int32_t> out(size_t(bx) * by * bz, -1);
+  for (int b = 0; b < int(out.size()); ++b) {
+    const int i0 = (b % bx) * brick, j0 = (b / bx % by) * brick, k0 = b / (bx * by) * brick;
+    int64_t rep = -1;
+    bool same = true;
+    for (int k = k0; same && k < std::min(k0 + brick, grid.nz); ++k)
+      for (int j = j0; same && j < std::min(j0 + brick, grid.ny); ++j)
+        for (int i = i0; same && i < std::min(i0 + brick, grid.nx); ++i) {
+          if (mesh_bounds && !reachable(grid, i, j, k)) continue;
+          size_t v = grid.index(i, j, k);
+          if (rep < 0) {
+            rep = int64_t(v);
+            continue;
+          }
+          for (int c = 0; c < 3 && same; ++c)
+            same = close(grid.sigma_s[3 * v + c], grid.sigma_s[3 * rep + c]) &&
+                   close(grid.sigma_a[3 * v + c], grid.sigma_a[3 * rep + c]);
+        }
+    if (same && rep >= 0) out[size_t(b)] = int32_t(rep);
+  }
   return out;
 }
 

@@ -129,6 +129,10 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                           interior.data());
   const int convex = (mesh_bounds || dielectric) && is_convex(*scene.mesh);
   ClMedium medium = upload_medium(cl, grid);
+  // Bricks of one coefficient need no voxel walk (pipelines/reference/inside_grid.hpp).
+  std::vector<int32_t> uniform = uniform_bricks(grid, medium.bricks.brick, mesh_bounds);
+  cl::Buffer uniform_buf(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                         uniform.size() * sizeof(int32_t), uniform.data());
   cl::Buffer lights = upload(cl, pack_lights(scene.lights));
   cl::Buffer camera = upload(cl, pack_camera(scene.camera, scene.width, scene.height));
   const int w = scene.width, h = scene.height;
@@ -186,10 +190,10 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     int n = std::min(per_pass, cap - done);
     gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz,
                   medium.bricks.brick, medium.bricks.bx, medium.bricks.by, medium.bricks.bz,
-                  medium.sigma_s, medium.sigma_t, medium.majorant, lights, light_count, g, camera,
-                  w, h, terms, n, done, s.seed, s.max_depth, ior, int(mesh_bounds || dielectric),
-                  convex, interior_buf, bvh_bounds, bvh_links, bvh_tris, float(sq_scale), sum,
-                  sum_sq);
+                  medium.sigma_s, medium.sigma_t, medium.majorant, uniform_buf, lights, light_count,
+                  g, camera, w, h, terms, n, done, s.seed, s.max_depth, ior,
+                  int(mesh_bounds || dielectric), convex, interior_buf, bvh_bounds, bvh_links,
+                  bvh_tris, float(sq_scale), sum, sum_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     spp = done + n;

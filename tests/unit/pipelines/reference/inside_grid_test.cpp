@@ -62,3 +62,57 @@ TEST(InteriorDepth, IsTheChebyshevDistanceToTheBoundaryLessTwo) {
 
 }  // namespace
 }  // namespace scatter
+
+namespace scatter {
+namespace {
+
+// A 4^3 grid of 2^3 bricks: a cube of medium in voxels 0-2 (the 3^3 corner), the rest empty.
+VoxelGrid corner_cube(float sigma_s) {
+  VoxelGrid g;
+  g.nx = g.ny = g.nz = 4;
+  g.voxel = 1;
+  g.occupancy.assign(g.count(), 0.0f);
+  g.sigma_s.assign(3 * g.count(), 0.0f);
+  g.sigma_a.assign(3 * g.count(), 0.0f);
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) {
+        size_t v = g.index(i, j, k);
+        g.occupancy[v] = 1.0f;
+        for (int c = 0; c < 3; ++c) {
+          g.sigma_s[3 * v + c] = sigma_s;
+          g.sigma_a[3 * v + c] = 0.1f;
+        }
+      }
+  return g;
+}
+
+// Bounded by the mesh, a brick is uniform when the voxels a segment inside can reach (those
+// inside or next to it) agree; the voxelized medium alone counts the empty voxels too.
+TEST(UniformBricks, NameAVoxelOfTheBricksOneCoefficient) {
+  VoxelGrid g = corner_cube(2.0f);
+  std::vector<int32_t> mesh = uniform_bricks(g, 2, true);
+  ASSERT_EQ(mesh.size(), 8u);
+  EXPECT_EQ(mesh[0], 0);  // brick (0, 0, 0): all inside, voxel 0's coefficients
+  // Brick (1, 0, 0) holds voxels x 2-3: x 2 inside, x 3 next to it but empty (0): not uniform.
+  EXPECT_EQ(mesh[1], -1);
+  // Brick (1, 1, 1) holds voxel (2, 2, 2) inside and empty ones next to it.
+  EXPECT_EQ(mesh[7], -1);
+  // Once restrict_to_mesh has filled the empty neighbours, the medium is one coefficient.
+  restrict_to_mesh(g);
+  mesh = uniform_bricks(g, 2, true);
+  for (int32_t u : mesh) EXPECT_GE(u, 0);
+  // Without the mesh, the empty voxels far from it are medium too (zero) and differ.
+  VoxelGrid bare = corner_cube(2.0f);
+  std::vector<int32_t> voxels = uniform_bricks(bare, 2, false);
+  EXPECT_EQ(voxels[0], 0);
+  EXPECT_EQ(voxels[7], -1);
+  // One voxel a float32 rounding apart still counts as the same; one 1e-4 apart does not.
+  bare.sigma_s[3 * bare.index(1, 1, 1)] = 2.0f * (1 + 2e-7f);
+  EXPECT_EQ(uniform_bricks(bare, 2, false)[0], 0);
+  bare.sigma_s[3 * bare.index(1, 1, 1)] = 2.0f * (1 + 1e-4f);
+  EXPECT_EQ(uniform_bricks(bare, 2, false)[0], -1);
+}
+
+}  // namespace
+}  // namespace scatter
