@@ -97,7 +97,8 @@ TEST_F(SinglePipelineTest, CoarseFrameIsNearTheFullOne) {
   EXPECT_NEAR(mean_ratio(r.image, a), 1.0, 0.03);
   bool said = false;
   for (const StagePlan& st : r.plan.stages)
-    if (st.name == "splat") said = st.reason.find("the coarse set: 5000 of the") != std::string::npos;
+    if (st.name == "splat")
+      said = st.reason.find("the coarse set: 5000 of the") != std::string::npos;
   EXPECT_TRUE(said);
   coarse["exact_tr"] = 0;
   RenderResult sh = pipeline().render(s, {Terms::Single, coarse, nullptr});
