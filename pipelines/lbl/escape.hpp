@@ -13,6 +13,7 @@
 // exact view transmittance.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "gpu/cl_context.hpp"
@@ -20,8 +21,34 @@
 
 namespace scatter::lbl {
 
-// P per voxel and channel (3 floats per voxel; 1 where nothing scatters), on the device.
-std::vector<float> exact_escape(gpu::ClContext& cl, const Volume& v, double g, int directions = 32);
+// `count` directions on a Fibonacci spiral (3 floats each).
+std::vector<float> fibonacci_directions(int count);
+
+// How exact_escape with a stride > 1 covers the grid: the samples it computes (indices into
+// the grid of every stride-th voxel, n[0] x n[1] x n[2]) and per voxel 0 (does not scatter: P 1),
+// 1 (the trilinear mean of the samples around it: each scatters, in a medium, by sigma_t',
+// within 25 % of the voxel's) or 2 (computed at the voxel itself: next to a surface, a blocker
+// or a density step). `scaled`: sigma_t' per voxel and channel.
+struct EscapeSampling {
+  std::array<int, 3> n{};
+  std::vector<cl_int> samples;
+  std::vector<cl_char> mode;
+};
+EscapeSampling escape_sampling(const Volume& v, const std::vector<float>& scaled, int stride);
+
+// P per voxel and channel (3 floats per voxel; 1 where nothing scatters), on the device. With
+// `stride` s > 1, P is computed only at every s-th voxel along each axis (the samples some
+// voxel needs); a scattering voxel inside one medium takes the trilinear mean of the samples
+// around it (P is smooth over a mean free path, 10-16 voxels on the shipped scenes), one next
+// to a surface, a blocker or a density step is computed itself (escape_sampling).
+// With `far` > 0 (stride > 1 only) a ray crosses the voxels for its first `far` voxel widths
+// and then a grid of half the resolution (coarse_sigma): about half the steps.
+std::vector<float> exact_escape(gpu::ClContext& cl, const Volume& v, double g, int directions = 32,
+                                int stride = 1, double far = 0);
+
+// sigma_t' on the grid of 2x2x2 voxels per cell ((n + 1) / 2 per side), the mean of the 8
+// (voxels past the grid's high end counted as empty); `scaled` 3 floats per voxel.
+std::vector<float> coarse_sigma(const Volume& v, const std::vector<float>& scaled);
 
 // P_lattice of the 6-direction lattice with collision chances `pt` (3 per node, open edges).
 std::vector<float> lattice_escape(const LatticeCoefficients& c);

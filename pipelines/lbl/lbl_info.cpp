@@ -26,6 +26,13 @@ const SettingsTable<LblSettings>& lbl_settings() {
        flag("escape", &S::escape, kept("material"),
             "1: scale each node's emission by the escape correction, a Marshak-type boundary "
             "(6 directions; docs/pipelines/lbl.md); 0: the open lattice alone"),
+       setting("escape_stride", &S::escape_stride, 1, 4, kept("material"),
+               "the escape correction's exact part at one voxel in n per axis, log-trilinear "
+               "between inside one medium, at the voxel itself next to a surface, blocker or "
+               "density step (1: at every voxel)"),
+       setting("escape_far", &S::escape_far, 0, 64, kept("material"),
+               "with escape_stride > 1: its rays cross the voxels for this many voxel widths, "
+               "then a grid of half the resolution (0: the voxels all the way)"),
        flag("scaled_view", &S::scaled_view, frame(),
             "1: the view pass gathers the multiple term through the delta-Eddington scaled medium "
             "(sigma_s', sigma_t'), as the lattice carries it; 0: through the real one"),

@@ -151,7 +151,17 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
        d.material
            ? std::to_string(scene.voxels) + " voxels on the long side; n, grad n smoothed over " +
                  short_number(s.smooth) + " voxels" +
-                 (s.escape && s.directions == 6 ? "; escape correction over 32 directions" : "")
+                 (s.escape && s.directions == 6
+                      ? "; escape correction over 32 directions" +
+                            (s.escape_stride > 1
+                                 ? " at one voxel in " + std::to_string(s.escape_stride) +
+                                       " per axis, log-trilinear between inside one medium" +
+                                       (s.escape_far > 0
+                                            ? ", rays at half resolution past " +
+                                                  short_number(s.escape_far) + " voxels"
+                                            : std::string())
+                                 : std::string(" at every voxel"))
+                      : "")
            : "material unchanged: volume kept"});
   std::string path = d.bend ? "bent by the ray equation, step " + short_number(s.step) + " voxels"
                             : "constant n: straight rays, exact voxel crossings (no gradient)";
@@ -235,8 +245,9 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
         .blocked = s.blocked, .block = s.block, .inner = s.inner, .directions = s.directions};
     lbl::LatticeCoefficients coefficients = lbl::lattice_coefficients(next->volume, scene.medium.g);
     if (s.escape && s.directions == 6)
-      coefficients.emit = lbl::escape_factor(lbl::exact_escape(cl, next->volume, scene.medium.g),
-                                             lbl::lattice_escape(coefficients));
+      coefficients.emit = lbl::escape_factor(
+          lbl::exact_escape(cl, next->volume, scene.medium.g, 32, s.escape_stride, s.escape_far),
+          lbl::lattice_escape(coefficients));
     next->lattice = std::make_unique<lbl::Lattice>(cl, coefficients, o);
     next->deposit =
         cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));

@@ -42,6 +42,8 @@ struct LblSettings {
   int inner = 1;
   int directions = 6;
   bool escape = true;
+  int escape_stride = 2;
+  double escape_far = 4;
   bool scaled_view = false;
   double tolerance = 1e-3;
   int max_steps = 20000;
