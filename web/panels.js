@@ -179,6 +179,12 @@ async function upload(file) {
   if (r.status >= 400) return showError(`upload of ${file.name} failed: ${r.body.error}`);
   const json = structuredClone((state.source && state.source.json) || {});
   json.mesh = { asset: r.body.id, fit: 2 };
+  // Framed whole: the fitted mesh lies in a box of side 2 about the origin (a bounding sphere of
+  // radius at most sqrt 3), seen along the current camera's direction.
+  const cam = json.camera || {};
+  const fov = cam.fov_deg || 40, from = cam.position || [0, 0, 1];
+  const len = Math.hypot(...from) || 1, dist = 1.1 * Math.sqrt(3) / Math.sin((fov * Math.PI) / 360);
+  json.camera = { ...cam, position: from.map((v) => (v / len) * dist), target: [0, 0, 0] };
   if (json.medium && json.medium.density && ['blocker', 'grid'].includes(json.medium.density.type))
     json.medium.density = { type: 'constant' };
   state.source = { inline: true, json };
