@@ -263,10 +263,16 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
         alpha, static_cast<float>(s.shift), s.atten, static_cast<float>(s.spacing), orders ? 1 : 0,
         o ? o->bands : v.pyramid.data, o ? o->nx : 1, o ? o->ny : 1, o ? o->nz : 1,
         o ? o->cell : 1.f, flux, o && o->conserve ? o->cell : 0.f, out);
-    queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
-    if (request.progress) {
-      queue.finish();
-      request.progress(double(i + 1) / keys.size());
+    // In bands of rows where a progress can stop it: a live view's pose waits for a band, not for
+    // a whole march (seconds at 512^2).
+    const size_t band = request.progress ? std::max<size_t>(8, (size_t(h) + 15) / 16) : size_t(h);
+    for (size_t y = 0; y < size_t(h); y += band) {
+      const size_t rows = std::min(band, size_t(h) - y);
+      queue.enqueueNDRangeKernel(k, cl::NDRange(0, y), cl::NDRange(w, rows));
+      if (request.progress) {
+        queue.finish();
+        request.progress((double(i) + double(y + rows) / h) / keys.size());
+      }
     }
   }
   queue.finish();

@@ -80,6 +80,30 @@ TEST(PsfPipeline, SingleTermAgreesWithTheReferenceMarcher) {
             0.02);
 }
 
+// The march reports its progress in bands of rows, so that a cancel (a progress that throws)
+// stops it within a band, and the banded image is the one-pass image.
+TEST(PsfPipeline, MarchStopsWithinABandOfRows) {
+  Scene s = small_sphere();
+  s.width = s.height = 64;
+  PsfPipeline p(test::shared_gpu());
+  Image whole = p.render(s, {Terms::All, {}}).image;
+  std::vector<double> seen;
+  Image banded = p.render(s, {Terms::All, {}, [&](double f) { seen.push_back(f); }}).image;
+  ASSERT_GE(seen.size(), 8u);  // 64 rows in bands of 8, one light
+  for (size_t i = 1; i < seen.size(); ++i) EXPECT_GT(seen[i], seen[i - 1]);
+  EXPECT_DOUBLE_EQ(seen.back(), 1.0);
+  EXPECT_EQ(banded.rgb, whole.rgb);
+  int calls = 0;
+  struct Stop {};
+  EXPECT_THROW(p.render(s, {Terms::All,
+                            {},
+                            [&](double) {
+                              if (++calls == 2) throw Stop{};
+                            }}),
+               Stop);
+  EXPECT_EQ(calls, 2);  // no band after the one that stopped it
+}
+
 // The orders model (model 1, the default) against the reference path tracer's multiple term on a
 // small sphere, and the paper's (model 0) as far off as docs/BENCHMARKS.md says it is.
 TEST(PsfPipeline, SphereMultipleTermIsNearTheReference) {
