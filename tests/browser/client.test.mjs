@@ -235,9 +235,10 @@ test('first sight: a translucent jade bunny, steered without losing the view', {
     const uh = await sock.next(sock.sent, hu, (m) => m.type === 'hello');
     assert.ok(uh.scene && uh.scene.mesh.asset, `the hello shows the upload: ${JSON.stringify(uh.scene && uh.scene.mesh)}`);
     // Framed whole: the fitted box's bounding sphere (radius sqrt 3) within the field of view.
-    const c = uh.scene.camera, d = Math.hypot(...c.position.map((v, i) => v - c.target[i]));
-    assert.ok(d * Math.sin(((c.fov_deg || 40) * Math.PI) / 360) >= Math.sqrt(3),
-              `the uploaded mesh is framed whole: ${JSON.stringify(c)}`);
+    const cam = uh.scene.camera;
+    const dist = Math.hypot(...cam.position.map((v, i) => v - cam.target[i]));
+    assert.ok(dist * Math.sin(((cam.fov_deg || 40) * Math.PI) / 360) >= Math.sqrt(3),
+              `the uploaded mesh is framed whole: ${JSON.stringify(cam)}`);
     await page.waitForFunction((r) => document.getElementById('view').dataset.request === String(r), uh.request, { timeout: 60000 });
     assert.ok(await frames(page) > u);
     await page.screenshot({ path: `${out}/browser-upload.png` });
