@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/errors.hpp"
+#include "pipelines/budget/calibration.hpp"
 #include "pipelines/cost.hpp"
 #include "pipelines/image.hpp"
 #include "pipelines/metrics.hpp"
@@ -103,6 +104,7 @@ Refinement::Refinement(const Scene& scene, const std::string& pipeline, const st
                    c->settings};
       m.scale = c->scale;
       steps_.push_back(std::move(m));
+      composite_error_ = composite_error(scene_, pipeline, settings, *c);
     }
   }
   // The reference's own Monte Carlo frames gain nothing from its presets (they set the marcher's
@@ -187,6 +189,23 @@ Refinement::Outcome Refinement::take(const RefineStep& step, RenderResult& resul
   return o;
 }
 
+std::optional<double> composite_error(const Scene& scene, const std::string& pipeline,
+                                      const Settings& settings, const Composite& composite) {
+  auto quality_of = [](const std::string& name, const Settings& s) -> std::optional<std::string> {
+    for (const Quality& q : pipeline_info(name).qualities)
+      if (q.settings == s) return q.name;
+    return std::nullopt;
+  };
+  auto single = quality_of(pipeline, settings);
+  auto multiple = quality_of(composite.pipeline, composite.settings);
+  if (!single || !multiple) return std::nullopt;
+  auto p = CalibrationTable::shipped().predict_error(
+      classify(scene, Terms::All),
+      pipeline + ":" + *single + "+" + composite.pipeline + ":" + *multiple);
+  if (!p) return std::nullopt;
+  return p->value;
+}
+
 void Refinement::add_multiple(const RefineStep& step, RenderResult& result) {
   if (!options_.composite) return;
   if (step.stage == RefineStep::Stage::Full) {
@@ -196,7 +215,8 @@ void Refinement::add_multiple(const RefineStep& step, RenderResult& result) {
   if (step.stage == RefineStep::Stage::Multiple) {
     multiple_ = resample(result.image, full_.width, full_.height);
     result.image = full_;
-    result.error_estimate.reset();  // the multiple term's own is not the composite's
+    // The multiple term's own estimate is not the composite's: the calibrated one, if any.
+    result.error_estimate = composite_error_;
   }
   if (!multiple_ || result.image.rgb.size() != multiple_->rgb.size()) return;
   for (size_t k = 0; k < result.image.rgb.size(); ++k) result.image.rgb[k] += multiple_->rgb[k];

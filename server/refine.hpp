@@ -39,6 +39,12 @@ struct Composite {
   double scale = 0.5;
 };
 
+// A composite frame's calibrated error (pipelines/budget/calibration.json): the way
+// "pipeline:Q+composite:Q'" where both settings are one of their pipeline's qualities and the
+// table calibrated it for the scene's class; none otherwise.
+std::optional<double> composite_error(const Scene& scene, const std::string& pipeline,
+                                      const Settings& settings, const Composite& composite);
+
 struct RefineOptions {
   double floor = 0.01;        // stop once the estimated error is at or under this
   int max_passes = 64;        // reference passes, at most
@@ -122,7 +128,8 @@ class Refinement {
   Terms terms_ = Terms::All;
   Settings settings_;
   RefineOptions options_;
-  std::vector<RefineStep> steps_;  // full, the multiple term, then the qualities
+  std::vector<RefineStep> steps_;          // full, the multiple term, then the qualities
+  std::optional<double> composite_error_;  // the composite frames' calibrated error
   Image full_;                     // with a composite: the full frame, and the multiple term
   std::optional<Image> multiple_;  // resampled to its size, once rendered
   size_t taken_ = 0;               // of steps_

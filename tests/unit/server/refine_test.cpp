@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "../test_util.hpp"
+#include "pipelines/budget/calibration.hpp"
 #include "pipelines/metrics.hpp"
 
 namespace scatter::server {
@@ -235,6 +236,30 @@ TEST(RefineTest, ACompositeAddsTheMultipleTermToTheStillFrames) {
   Refinement brief(sphere(), "thickness", "single", {}, {.max_render_s = 1e-9, .composite = c});
   RenderResult again = result(0.1);
   EXPECT_EQ(brief.take(*brief.next(), again).state, State::Done);
+}
+
+// A composite whose two parts are calibrated presets carries the table's error for their sum;
+// one that is not (psf's draft: its multiple term is not in the table) carries none.
+TEST(RefineTest, ACompositeFrameCarriesItsCalibratedError) {
+  Composite c{"psf", {}, 0.5};  // psf's normal quality
+  auto expected = CalibrationTable::shipped().predict_error(classify(sphere(), Terms::All),
+                                                            "thickness:normal+psf:normal");
+  ASSERT_TRUE(expected);
+  ASSERT_EQ(composite_error(sphere(), "thickness", {}, c), expected->value);
+  Refinement r(sphere(), "thickness", "single", {},
+               {.floor = 0.01, .max_passes = 4, .composite = c});
+  RenderResult full = result(0.1);
+  r.take(*r.next(), full);
+  auto step = r.next();
+  ASSERT_EQ(step->stage, Stage::Multiple);
+  RenderResult multiple;
+  multiple.image = Image(2, 2);
+  multiple.error_estimate = 0.3;
+  auto out = r.take(*step, multiple);
+  ASSERT_TRUE(out.estimate);
+  EXPECT_DOUBLE_EQ(*out.estimate, expected->value);
+  EXPECT_FALSE(composite_error(sphere(), "thickness", {}, {"psf", {{"step", 2}}, 0.5}));
+  EXPECT_FALSE(composite_error(sphere(), "thickness", {{"steps", 7}}, c));  // not a preset
 }
 
 TEST(RefineTest, TheReferencesOwnMonteCarloSkipsItsPresetsAndKeepsItsSettings) {
