@@ -39,9 +39,10 @@ const SettingsTable<SingleSettings>& single_settings() {
                "the spacing's range [r/2, 2r] raised to this power: 1 the paper's rule, 0 uniform"),
        setting("seed", &S::bake, &B::seed, 0, 1 << 30, baked(), "random seed of the sampling"),
        setting("splat_scale", &S::splat_scale, 0.0, 1.0, frame(),
-               "the splat's size over the image's, upsampled along the view rays' chords (0: "
-               "half where the median Gaussian spans at least 4 pixels, else full; else at "
-               "least 0.25)"),
+               "the splat's size over the image's, upsampled along the view rays' chords (0: one "
+               "pixel in s "
+               "x s, s up to 4, while the median Gaussian spans at least 2 of the splat's pixels; "
+               "else at least 0.25)"),
        flag("coarse", &S::coarse, frame(),
             "1: splat the bake's coarse set, a quarter of the samples (their progressive order "
             "makes them Poisson-disk) widened by 4^(1/3), with weights fitted for them (the live "

@@ -46,11 +46,13 @@ inline bool phase_per_ray(const Scene& scene) {
   return !scene.lights.empty() && std::abs(scene.medium.g) >= kPerRayPhaseG;
 }
 
-// splat_scale 0 (auto) splats at half size where the median Gaussian's sigma spans at least this
-// many pixels of the full image (its closest part to the eye), then upsamples along the chords
-// (shaders/single/upsample.frag): the splat's fragments fall 4x where they are many and the field
-// is smooth over a pixel.
-inline constexpr double kHalfSplatSigmaPx = 4.0;
+// splat_scale 0 (auto) splats one pixel in s x s, s the largest stride (up to 4) at which the
+// median Gaussian's sigma still spans this many of the splat's pixels at the medium's near side,
+// then upsamples along the chords (shaders/single/upsample.frag): the splat's fragments fall s^2
+// times where they are many and the field is smooth over a pixel. Measured at 512 x 512 on the
+// shipped scenes (sigma 8-9 pixels): stride 2 -> 4 is 1.5-2.3x faster and a little closer to the
+// reference (docs/BENCHMARKS.md).
+inline constexpr double kSplatSigmaPx = 2.0;
 
 // The pixels per world unit at the medium's near side (its bounding sphere's), where splat_scale
 // auto measures the Gaussians.
@@ -58,7 +60,7 @@ double near_pixels_per_unit(const Scene& scene);
 // The splat's stride for a splat_scale `scale` (0: auto, by a median Gaussian sigma `sigma`).
 inline int splat_stride(double scale, double sigma, const Scene& scene) {
   if (scale > 0) return std::clamp(int(std::lround(1 / scale)), 1, 4);
-  return sigma * near_pixels_per_unit(scene) >= kHalfSplatSigmaPx ? 2 : 1;
+  return std::clamp(int(sigma * near_pixels_per_unit(scene) / kSplatSigmaPx), 1, 4);
 }
 
 // The samples a frame splats: all, or (coarse) the bake's coarse set, the first coarse_count of

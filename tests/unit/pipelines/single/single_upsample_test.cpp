@@ -1,5 +1,7 @@
 // splat_scale: the splat evaluates every stride-th pixel and the upsample fills in the rest
 // (shaders/single/upsample.frag).
+#include <algorithm>
+
 #include "single_fixture.hpp"
 
 namespace scatter::single_test {
@@ -44,7 +46,7 @@ TEST_F(SinglePipelineTest, HalfSizeSplatKeepsItsPixelsAndInterpolatesTheRest) {
   // Kept pixels: the same Gaussians along the same ray (rasterised at another size, so one at
   // the edge of its quad may fall in or out: measured 1.3e-5 of the peak).
   EXPECT_LT(worst_kept, 1e-4 * peak);
-  // Measured 2.0 % at this size (a sigma of about 2 pixels; auto halves only from 4).
+  // Measured 2.0 % at this size (a sigma of about 2 pixels; auto strides only from 4).
   EXPECT_LT(std::sqrt(err / ref), 0.03);
   EXPECT_NEAR(mean_ratio(half, full), 1.0, 0.005);
   bool named = false;
@@ -53,8 +55,9 @@ TEST_F(SinglePipelineTest, HalfSizeSplatKeepsItsPixelsAndInterpolatesTheRest) {
   EXPECT_TRUE(named) << "the plan says at what size the splat ran";
 }
 
-// auto (splat_scale 0) halves where the median Gaussian spans at least kHalfSplatSigmaPx pixels:
-// at 512 x 512 on the sphere, not at 64 x 64; a scale below 0.25 is refused by name.
+// auto (splat_scale 0) strides so that the median Gaussian spans at least kSplatSigmaPx of the
+// splat's pixels: at 512 x 512 on the sphere, not at 64 x 64; a scale below 0.25 is refused by
+// name.
 TEST_F(SinglePipelineTest, AutoSplatScaleFollowsTheGaussiansOnScreen) {
   Scene small = small_sphere(64, 32);
   Scene large = small_sphere(512, 32);
@@ -64,7 +67,17 @@ TEST_F(SinglePipelineTest, AutoSplatScaleFollowsTheGaussiansOnScreen) {
     return std::string();
   };
   EXPECT_EQ(splat_reason(small).find("one pixel in"), std::string::npos);
-  EXPECT_NE(splat_reason(large).find("256 x 256"), std::string::npos);
+  const std::string reason = splat_reason(large);
+  std::vector<float> sigmas = pipeline().current()->sigma;
+  std::nth_element(sigmas.begin(), sigmas.begin() + sigmas.size() / 2, sigmas.end());
+  const double sigma_px = sigmas[sigmas.size() / 2] * near_pixels_per_unit(large);
+  const int stride = std::clamp(int(sigma_px / kSplatSigmaPx), 1, 4);
+  ASSERT_GE(stride, 2) << sigma_px;
+  const std::string side = std::to_string((512 + stride - 1) / stride);
+  EXPECT_NE(reason.find("one pixel in " + std::to_string(stride) + " x " + std::to_string(stride) +
+                        " (" + side + " x " + side),
+            std::string::npos)
+      << reason << " (sigma " << sigma_px << " px)";
   try {
     pipeline().plan(small, {Terms::Single, with(kExact, "splat_scale", 0.1), nullptr});
     FAIL() << "splat_scale 0.1 was accepted";
