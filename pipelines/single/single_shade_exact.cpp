@@ -22,7 +22,8 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
     cl_position_ = scatter::upload(cl, b.position);
     cl_sigma_ = scatter::upload(cl, b.sigma);
     cl_weight_ = scatter::upload(cl, b.weight);
-    cl_coarse_weight_ = scatter::upload(cl, b.coarse_weight.empty() ? b.weight : b.coarse_weight);
+    // Without a coarse set (under 1024 samples) the same buffer: drawn.coarse is never set then.
+    cl_coarse_weight_ = b.coarse_weight.empty() ? cl_weight_ : scatter::upload(cl, b.coarse_weight);
     cl_sigma_s_ = scatter::upload(cl, b.sigma_s);
     cl_plane_ = scatter::upload(
         cl, b.plane.empty() ? std::vector<float>(size_t(std::max(b.count, 1)) * 4, 0.f) : b.plane);
