@@ -1,5 +1,7 @@
 #include "pipelines/thickness/thickness_pipeline.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <numbers>
 
@@ -10,6 +12,10 @@
 #include "scene/mesh.hpp"
 
 namespace scatter {
+
+namespace {
+constexpr double kPieceStepsPerBand = 512.0 * 512 * 32 / 4;
+}  // namespace
 
 Plan ThicknessPipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
@@ -139,10 +145,38 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   glDisable(GL_DEPTH_TEST);
   glUseProgram(integ);
   glBindVertexArray(empty_vao_.get());
-  glDrawArrays(GL_TRIANGLES, 0, 3);
-  glBindVertexArray(0);
-  glUseProgram(0);
-  for (GLuint unit = 0; unit < 2 + scene.lights.size(); ++unit) glBindTextureUnit(unit, 0);
+  // The GL state back as the other draws expect it, also when a progress stops the frame.
+  const auto unbind = [&, units = GLuint(2 + scene.lights.size())] {
+    glDisable(GL_SCISSOR_TEST);
+    glBindVertexArray(0);
+    glUseProgram(0);
+    for (GLuint unit = 0; unit < units; ++unit) glBindTextureUnit(unit, 0);
+  };
+  // In bands of rows where a progress can stop it (the high step takes seconds on a loaded CPU):
+  // a live view's pose waits for a band, not for the whole integral. A band is about
+  // kPieceStepsPerBand pixel pieces (25 ms on this CPU idle), so a small frame is one draw.
+  const double pieces = double(scene.width) * scene.height * s.steps;
+  const int bands = std::clamp(int(std::ceil(pieces / kPieceStepsPerBand)), 1, 16);
+  if (request.progress && bands > 1) {
+    const int band = std::max(8, (scene.height + bands - 1) / bands);
+    glEnable(GL_SCISSOR_TEST);
+    try {
+      for (int y = 0; y < scene.height; y += band) {
+        const int rows = std::min(band, scene.height - y);
+        glScissor(0, y, scene.width, rows);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glFinish();
+        request.progress(double(y + rows) / scene.height);
+      }
+    } catch (...) {
+      unbind();
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      throw;
+    }
+  } else {
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+  unbind();
   gpu::check_gl("thickness integrate");
   glFinish();
   clock.stop("integrate");

@@ -98,5 +98,35 @@ TEST(ThicknessPipeline, KeepsItsShadowMapsWhileTheLightsStay) {
   EXPECT_EQ(lit.image.rgb, render(ThicknessPipeline(test::shared_gpu()), s).rgb);
 }
 
+// With a progress a long integral runs in bands of rows, reporting after each: the same image, and
+// a progress that throws (a cancel) stops it after that band, leaving the GL state for the next
+// frame. A short one is one draw.
+TEST(ThicknessPipeline, IntegralStopsWithinABandOfRows) {
+  Scene s = load_scene(test::source_path("scenes/sphere.json"));
+  s.width = s.height = 32;
+  int small_calls = 0;
+  ThicknessPipeline p(test::shared_gpu());
+  p.render(s, {Terms::Single, {}, [&](double) { ++small_calls; }});
+  EXPECT_EQ(small_calls, 0);
+  s.width = s.height = 256;
+  const Settings steps{{"steps", 256}};  // 256^2 pixels x 256 pieces: 8 bands of 32 rows
+  Image whole = render(ThicknessPipeline(test::shared_gpu()), s, steps);
+  std::vector<double> seen;
+  Image banded = p.render(s, {Terms::Single, steps, [&](double f) { seen.push_back(f); }}).image;
+  ASSERT_EQ(seen.size(), 8u);
+  for (size_t i = 1; i < seen.size(); ++i) EXPECT_GT(seen[i], seen[i - 1]);
+  EXPECT_DOUBLE_EQ(seen.back(), 1.0);
+  EXPECT_EQ(banded.rgb, whole.rgb);
+  int calls = 0;
+  struct Stop {};
+  EXPECT_THROW(p.render(s, {Terms::Single, steps,
+                            [&](double) {
+                              if (++calls == 2) throw Stop{};
+                            }}),
+               Stop);
+  EXPECT_EQ(calls, 2);  // no band after the one that stopped it
+  EXPECT_EQ(p.render(s, {Terms::Single, steps, nullptr}).image.rgb, whole.rgb);
+}
+
 }  // namespace
 }  // namespace scatter
