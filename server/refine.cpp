@@ -185,7 +185,10 @@ Refinement::Outcome Refinement::take(const RefineStep& step, RenderResult& resul
   const bool improves = !o.estimate || !last || *o.estimate < *last;
   o.send = step.stage == RefineStep::Stage::Full || worth_sending(o.estimate, last) ||
            (o.state != State::Converging && improves);
-  if (o.send) last_sent_ = o.estimate;
+  // A frame without an estimate (a higher quality the table does not calibrate, with the same
+  // multiple term added) leaves the last shown one as the mark later passes must beat: the page
+  // never reads an error that rises.
+  if (o.send && (o.estimate || !last_sent_)) last_sent_ = o.estimate;
   return o;
 }
 

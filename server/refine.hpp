@@ -14,7 +14,8 @@
 //
 // Each result carries an estimated error (RenderResult::error_estimate: the path tracer's from its
 // standard error, the approximations' from calibration where known). A result is sent only when
-// its estimate is at most 0.9 x the last sent frame's; refinement ends at the floor, after
+// its estimate is at most 0.9 x the last estimate sent (a frame sent without one, such as a
+// higher quality's, does not reset it); refinement ends at the floor, after
 // max_passes reference passes, or when the session starts a new one (the user moved).
 #pragma once
 

@@ -30,10 +30,13 @@ double ms_since(Clock::time_point t) {
 const std::vector<std::string> kSingleWays = {"thickness:draft", "thickness:normal", "single:draft",
                                               "single:normal",   "reference:draft",  "psf:normal",
                                               "lbl:normal"};
-const std::vector<std::string> kMultipleWays = {"lbl:draft", "lbl:normal", "psf:normal"};
+const std::vector<std::string> kMultipleWays = {"lbl:draft", "lbl:normal", "psf:draft",
+                                                "psf:normal"};
 const std::vector<std::string> kCompositeSingles = {
     "thickness:draft", "thickness:normal", "single:draft", "reference:draft", "psf:normal"};
-const std::vector<std::string> kCompositeMultiples = {"lbl:draft", "lbl:normal", "psf:normal"};
+// psf:draft: the web client's default composite (docs/WEB.md).
+const std::vector<std::string> kCompositeMultiples = {"lbl:draft", "lbl:normal", "psf:draft",
+                                                      "psf:normal"};
 
 // The error against a Monte Carlo reference with its noise taken out: the expected squared
 // difference is the squared error plus the reference's squared noise (independent, zero mean).

@@ -302,8 +302,10 @@ test('the page works with --token', { timeout: 120000 }, async () => {
   }
 });
 
-// Still, the view is refined: thickness's frames (no estimate), then the reference's passes, whose
-// estimated error the overlay shows, falling, until it is under the floor (1 %) or the passes end.
+// Still, the view is refined: thickness's full frame (no estimate), the composite with psf's
+// multiple term (its calibrated error), thickness's high quality (none: the composite's stays the
+// mark), then the reference's passes, whose estimated error the overlay shows, falling, until it
+// is under the floor (1 %) or the passes end.
 test('a still view shows its estimated error converging', { timeout: 180000 }, async () => {
   const { proc, url } = await startDaemon(['--refine-pass-s', '0.5', '--refine-max-passes', '40']);
   const browser = await launch();

@@ -213,7 +213,9 @@ TEST(RefineTest, ACompositeAddsTheMultipleTermToTheStillFrames) {
   multiple.error_estimate = 0.3;  // psf's own: not the composite's
   auto out = r.take(*step, multiple);
   EXPECT_TRUE(out.send);
-  EXPECT_FALSE(out.estimate);
+  ASSERT_TRUE(out.estimate);  // the calibrated error of thickness + psf's draft, not psf's own
+  EXPECT_DOUBLE_EQ(*out.estimate, *composite_error(sphere(), "thickness", {}, c));
+  EXPECT_NE(*out.estimate, 0.3);
   ASSERT_EQ(multiple.image.width, 4);
   ASSERT_EQ(multiple.image.height, 4);
   // Rows 0..3 sample the small image's rows at -0.25, 0.25, 0.75, 1.25: 0.5, 0.75, 1.25, 1.5.
@@ -225,8 +227,14 @@ TEST(RefineTest, ACompositeAddsTheMultipleTermToTheStillFrames) {
   step = r.next();
   ASSERT_EQ(step->stage, Stage::Quality);
   RenderResult high = result(0.2);
-  r.take(*step, high);
+  auto shown = r.take(*step, high);
   EXPECT_FLOAT_EQ(high.image.at(0, 3)[0], 2.5f);  // its single term plus the multiple term
+  // Sent without an estimate, it keeps the composite's as the mark the passes must beat by a
+  // tenth: the page never shows a rising error.
+  EXPECT_TRUE(shown.send);
+  EXPECT_FALSE(shown.estimate);
+  ASSERT_TRUE(r.last_sent());
+  EXPECT_DOUBLE_EQ(*r.last_sent(), *out.estimate);
   step = r.next();
   ASSERT_TRUE(step);
   EXPECT_EQ(step->stage, Stage::Reference);
@@ -238,8 +246,8 @@ TEST(RefineTest, ACompositeAddsTheMultipleTermToTheStillFrames) {
   EXPECT_EQ(brief.take(*brief.next(), again).state, State::Done);
 }
 
-// A composite whose two parts are calibrated presets carries the table's error for their sum;
-// one that is not (psf's draft: its multiple term is not in the table) carries none.
+// A composite whose two parts are calibrated presets carries the table's error for their sum
+// (also the web client's default, thickness with psf's draft); one that is not carries none.
 TEST(RefineTest, ACompositeFrameCarriesItsCalibratedError) {
   Composite c{"psf", {}, 0.5};  // psf's normal quality
   auto expected = CalibrationTable::shipped().predict_error(classify(sphere(), Terms::All),
@@ -258,7 +266,11 @@ TEST(RefineTest, ACompositeFrameCarriesItsCalibratedError) {
   auto out = r.take(*step, multiple);
   ASSERT_TRUE(out.estimate);
   EXPECT_DOUBLE_EQ(*out.estimate, expected->value);
-  EXPECT_FALSE(composite_error(sphere(), "thickness", {}, {"psf", {{"step", 2}}, 0.5}));
+  auto draft = CalibrationTable::shipped().predict_error(classify(sphere(), Terms::All),
+                                                         "thickness:normal+psf:draft");
+  ASSERT_TRUE(draft);
+  EXPECT_EQ(composite_error(sphere(), "thickness", {}, {"psf", {{"step", 2}}, 0.5}), draft->value);
+  EXPECT_FALSE(composite_error(sphere(), "thickness", {}, {"psf", {{"step", 3}}, 0.5}));
   EXPECT_FALSE(composite_error(sphere(), "thickness", {{"steps", 7}}, c));  // not a preset
 }
 
