@@ -24,10 +24,13 @@ Pipeline& AutoPipeline::delegate(const std::string& name) {
 }
 
 IsBaked AutoPipeline::baked_in_cache(const Scene& scene) {
-  if (!cache_) return nullptr;
-  return [this, &scene](const std::string& pipeline, const Settings& settings) {
+  return [this, &scene](const std::string& pipeline, Terms terms, const Settings& settings) {
     const PipelineInfo& info = pipeline_info(pipeline);
-    return info.bake_key && cache_->get(info.bake_key(scene, settings)).has_value();
+    if (info.bakes())
+      return cache_ && info.bake_key && cache_->get(info.bake_key(scene, settings)).has_value();
+    // A delegate that keeps state between frames (lbl), made by an earlier frame of this auto.
+    auto p = pipelines_.find(pipeline);
+    return p != pipelines_.end() && p->second && p->second->keeps(scene, {terms, settings, {}});
   };
 }
 

@@ -40,7 +40,8 @@ class AutoPipeline : public Pipeline {
   // The request a part of the chosen way gets.
   static RenderRequest part_request(const BudgetChoice& c, size_t part, const RenderRequest& r);
   Plan describe(const Scene& scene, const RenderRequest& request, const BudgetChoice& c);
-  IsBaked baked_in_cache(const Scene& scene);  // by the cache's keys
+  // By the cache's keys, and what the delegates keep (Pipeline::keeps).
+  IsBaked baked_in_cache(const Scene& scene);
 
   gpu::Gpu& gpu_;
   BakeCache* cache_;

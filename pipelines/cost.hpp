@@ -17,9 +17,12 @@
 namespace scatter {
 
 struct CostEstimate {
-  double host_bytes = 0;     // peak host memory of this render or bake, beyond the loaded scene
-  double device_bytes = 0;   // OpenCL buffers and GL textures/renderbuffers it allocates
-  double seconds = 0;        // expected run time on a 2-core CPU (PoCL/llvmpipe); conservative
+  double host_bytes = 0;    // peak host memory of this render or bake, beyond the loaded scene
+  double device_bytes = 0;  // OpenCL buffers and GL textures/renderbuffers it allocates
+  double seconds = 0;       // expected run time on a 2-core CPU (PoCL/llvmpipe); conservative
+  // Of `seconds`, what a pipeline that keeps state between frames skips while it is kept
+  // (Pipeline::keeps; lbl: volume, march and diffusion); 0 for the others.
+  double kept_seconds = 0;
   std::string memory_field;  // the request field that drives memory most ("scene.voxels", ...)
   std::string time_field;    // the field that drives time most ("settings.spp", ...)
   std::string summary;       // one line a person can act on: "514^3 voxels x 89 B = 12 GB"

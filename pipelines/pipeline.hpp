@@ -120,6 +120,10 @@ class Pipeline {
     return {};
   }
   virtual RenderResult render(const Scene& scene, const RenderRequest& request) = 0;
+  // Whether this instance still holds what a frame of `scene` for `request` builds before its
+  // last pass (lbl: the volume, the deposit and the converged lattice), so that the frame costs
+  // only that pass (CostEstimate::kept_seconds is the rest). Planners ask it; false by default.
+  virtual bool keeps(const Scene&, const RenderRequest&) const { return false; }
 };
 
 // Names the registry holds (pipelines/registry.hpp), in a stable order.

@@ -20,17 +20,22 @@ std::string seconds(double s) {
   return short_number(s) + " s";
 }
 
-// A render's seconds, its bake's counted only when it is not made yet.
+// A render's seconds, its bake's counted only when it is not made yet, and what a pipeline keeps
+// between frames (lbl's volume, deposit and lattice) only when it does not hold it.
 double part_seconds(const Scene& scene, const WayPart& part, const Settings& settings,
                     const IsBaked& baked, bool* needs_bake) {
   RenderRequest r{part.terms, settings, {}};
-  double s = estimate_cost(part.pipeline, scene, r, false).seconds;
+  const CostEstimate frame = estimate_cost(part.pipeline, scene, r, false);
+  double s = frame.seconds;
   *needs_bake = pipeline_info(part.pipeline).bakes();
-  if (*needs_bake && baked && baked(part.pipeline, settings)) {
-    s = std::max(0.0, s - estimate_cost(part.pipeline, scene, r, true).seconds);
+  if (!baked || !baked(part.pipeline, part.terms, settings)) return s;
+  if (*needs_bake) {
+    s -= estimate_cost(part.pipeline, scene, r, true).seconds;
     *needs_bake = false;
+  } else {
+    s -= frame.kept_seconds;
   }
-  return s;
+  return std::max(0.0, s);
 }
 
 // The density contrast from which psf's multiple term is not offered (docs/BENCHMARKS.md, psf:

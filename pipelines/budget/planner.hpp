@@ -45,8 +45,11 @@ struct BudgetChoice {
   std::vector<PlanOption> alternatives;
 };
 
-// Whether the bake a pipeline needs for these settings is already made (null: count every bake).
-using IsBaked = std::function<bool(const std::string& pipeline, const Settings& settings)>;
+// Whether what a pipeline makes before a frame of these terms and settings is already made: the
+// bake a pipeline that bakes needs (in the cache), or the state one that keeps state holds
+// (Pipeline::keeps: lbl's volume, deposit and lattice). Null: count everything.
+using IsBaked =
+    std::function<bool(const std::string& pipeline, Terms terms, const Settings& settings)>;
 
 // Throws ValidationError (naming `field`) unless max_error is in [1e-4, 1] and `pipeline` takes a
 // budget: auto plans by it, the reference samples until it is met; the others render at their

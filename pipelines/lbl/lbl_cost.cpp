@@ -49,11 +49,13 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
   l.host("scene.image.width", px * 12, "the image");
 
   // Volume: measured 72^3 0.37-0.55 s, 104^3 1.75 s (~1.5 us a node with the voxelizer).
-  l.time("scene.voxels", voxelize_seconds(scene, n) + n * 1.5e-6,
-         grid + " volume and lattice built");
+  // What a kept state skips (Pipeline::keeps): everything but the view.
+  double kept = voxelize_seconds(scene, n) + n * 1.5e-6;
+  l.time("scene.voxels", kept, grid + " volume and lattice built");
   // March: ~2 radius / step steps a ray. Measured 62,500 rays x 250 steps 1.4 s (89 ns); x 4
   // lights 2.4 s. Taken at 120 ns.
   const double ray_steps = 2 * radius / s.step;
+  kept += rays * ray_steps * 120e-9;
   l.time("settings.rays", rays * ray_steps * 120e-9,
          ray_text + " x " + std::to_string(int(ray_steps)) + " steps");
   // Diffuse: ~30 ns a node a step (docs/BENCHMARKS.md: 11 ms a step at 72^3, 75 ms at 136^3);
@@ -65,13 +67,16 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
       request.terms != Terms::Single && -std::expm1(-m.sigma_s * g.longest) >= s.skip_multiple;
   if (multiple) {
     const double steps = std::min<double>(s.max_steps, 600 + 60 * tau);
+    kept += steps * n * 30e-9 * (d == 18 ? 10 : 1);
     l.time("settings.max_steps", steps * n * 30e-9 * (d == 18 ? 10 : 1),
            std::to_string(int(steps)) + " lattice steps x " + grid);
   }
   // View: a ray a pixel through the grid; measured 4096 px x 250 steps 66 ms (65 ns a step).
   l.time("scene.image.width", px * ray_steps * 100e-9,
          std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px viewed");
-  return l.finish("lbl");
+  CostEstimate e = l.finish("lbl");
+  e.kept_seconds = std::min(kept, e.seconds);
+  return e;
 }
 
 }  // namespace scatter

@@ -206,6 +206,12 @@ RenderRequest LblPipeline::surface_request(const RenderRequest& request) {
   return r;
 }
 
+bool LblPipeline::keeps(const Scene& scene, const RenderRequest& request) const {
+  if (request.terms == Terms::Surface || !state_) return false;
+  const Decision d = decide(state_.get(), scene, request, LblSettings::read(request.settings));
+  return !d.material && !d.march && !d.diffuse;
+}
+
 Plan LblPipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
   LblSettings s = LblSettings::read(request.settings);

@@ -67,6 +67,8 @@ class LblPipeline : public Pipeline {
   const PipelineInfo& info() const override;
   Plan plan(const Scene& scene, const RenderRequest& request) override;
   RenderResult render(const Scene& scene, const RenderRequest& request) override;
+  // True when the frame would run only the view pass (a camera-only change).
+  bool keeps(const Scene& scene, const RenderRequest& request) const override;
   // Lattice steps the last diffusion took (0 when the last frame did not diffuse).
   int last_diffusion_steps() const { return last_steps_; }
 

@@ -228,6 +228,51 @@ TEST(Planner, TheSingleTermsReferenceIsTheMarcher) {
   EXPECT_EQ(c.expected_error, 0);
 }
 
+// What a delegate keeps between frames is not counted again: with lbl's volume, deposit and
+// lattice held (Pipeline::keeps) its expected time is its view pass alone.
+TEST(Planner, CountsOnlyTheViewWhileLblKeepsItsState) {
+  Scene s = sphere_scene(0.9, 4, 0);
+  auto lbl_seconds = [](const BudgetChoice& c) {
+    if (c.way.id() == "lbl:normal") return c.expected_seconds;
+    for (const PlanOption& o : c.alternatives)
+      if (o.pipeline == "lbl:normal") return o.expected_seconds;
+    return -1.0;
+  };
+  const CostEstimate frame = estimate_cost("lbl", s, {Terms::All, {}, {}});
+  ASSERT_GT(frame.kept_seconds, 0.5 * frame.seconds);  // the lattice's steps are most of it
+  BudgetChoice cold = plan_budget(s, Terms::All, Budget{0.10}, {}, table());
+  EXPECT_NEAR(lbl_seconds(cold), frame.seconds, 1e-9 * frame.seconds);
+  IsBaked held = [](const std::string& p, Terms t, const Settings&) {
+    return p == "lbl" && t == Terms::All;
+  };
+  BudgetChoice warm = plan_budget(s, Terms::All, Budget{0.10}, {}, table(), held);
+  EXPECT_NEAR(lbl_seconds(warm), frame.seconds - frame.kept_seconds, 1e-9 * frame.seconds);
+}
+
+// lbl keeps its state for a camera-only change, not for a moved light, another material or a
+// request for terms it did not diffuse; auto asks its own delegate.
+TEST(AutoBudget, KnowsWhatItsLblDelegateKeeps) {
+  Scene s = sphere_scene(0.9, 4, 0, 16);
+  s.voxels = 16;
+  auto lbl = make_pipeline("lbl", test::shared_gpu());
+  const RenderRequest all{Terms::All, {}, {}}, single{Terms::Single, {}, {}};
+  EXPECT_FALSE(lbl->keeps(s, all));  // nothing made yet
+  lbl->render(s, single);
+  EXPECT_TRUE(lbl->keeps(s, single));
+  EXPECT_FALSE(lbl->keeps(s, all));  // the single term diffused nothing
+  lbl->render(s, all);
+  EXPECT_TRUE(lbl->keeps(s, all));
+  Scene moved = s;
+  moved.camera.position = moved.camera.position + Vec3{0.5, 0.2, 0};
+  EXPECT_TRUE(lbl->keeps(moved, all));
+  moved.lights[0].position = moved.lights[0].position + Vec3{0.3, 0, 0};
+  EXPECT_FALSE(lbl->keeps(moved, all));
+  Scene denser = s;
+  denser.medium.sigma_s = denser.medium.sigma_s * 2.0;
+  EXPECT_FALSE(lbl->keeps(denser, all));
+  EXPECT_FALSE(lbl->keeps(s, {Terms::All, {{"rays", 3}}, {}}));  // another march
+}
+
 // Done when: a budget request on a scene that was not among the calibration scenes meets its
 // budget, measured against the reference. A sphere of albedo 0.95, tau 6 and g 0.3 is none of
 // them (tools/calibrate.cpp: albedo 0.6/0.9/0.99, tau 1/4/16, g 0/0.7).
