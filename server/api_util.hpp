@@ -24,4 +24,14 @@ std::map<std::string, std::string> parse_query(std::string_view target);
 // `dir`; throws ValidationError naming the field for a malformed or unknown id.
 void resolve_assets(nlohmann::json& j, const std::string& path, const std::filesystem::path& dir);
 
+// Inline scenes may only name files inside the scenes folder: throws ValidationError (naming the
+// field) for an absolute path or "..", or JSON nested deeper than kMaxJsonDepth.
+void check_file_fields(const nlohmann::json& j, const std::string& path, int depth = 0);
+
+// A message for the client: the server's own folders (assets, scenes) are not its business.
+std::string without_paths(std::string m, const ApiOptions& o);
+
+// The 503 text for a full render queue.
+std::string busy_message(const RenderQueue& q);
+
 }  // namespace scatter::server
