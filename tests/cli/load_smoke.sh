@@ -2,7 +2,8 @@
 # Usage: load_smoke.sh SCATTERD SCATTER_LOAD SOURCE_DIR OUT_DIR
 # scatter-load against a daemon on a free loopback port (--max-sessions 2): two live sessions on
 # sphere/surface get frames, pose-to-frame figures and no errors, and the report carries the
-# daemon's RSS from /metrics; three sessions: the third is refused with 503, counted, exit 0. A bad
+# daemon's RSS from /metrics; three sessions: the third is refused with 503, counted, exit 0; a
+# session whose every frame fails ends at --frames with the failures counted. A bad
 # option and an unreachable daemon are clear errors with a non-zero exit.
 set -eu
 scatterd=$1 load=$2 src=$3 out=$4
@@ -15,7 +16,11 @@ port=$scatterd_port pid=$scatterd_pid
   --rss-interval 0.5 --light-every 10 >"$out/two.json"
 sleep 1  # the two sessions' slots are given back as their connections close
 "$load" live --port "$port" --sessions 3 --duration 2 >"$out/three.json"
-node "$src/tests/cli/load_smoke_check.mjs" "$out/two.json" "$out/three.json"
+# Every frame fails (thickness needs a homogeneous medium; the bunny's is noise): a run bounded
+# by --frames alone still ends, the failures counted as answers.
+timeout 120 "$load" live --port "$port" --scene bunny --pipeline thickness --duration 0 --frames 2 \
+  >"$out/failing.json"
+node "$src/tests/cli/load_smoke_check.mjs" "$out/two.json" "$out/three.json" "$out/failing.json"
 
 if "$load" live --port "$port" --path spiral 2>"$out/bad.err"; then
   echo "FAIL: --path spiral was accepted"; exit 1

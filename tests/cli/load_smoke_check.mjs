@@ -1,8 +1,9 @@
-// Checks scatter-load's reports for load_smoke.sh: node load_smoke_check.mjs TWO.json THREE.json
+// Checks scatter-load's reports for load_smoke.sh:
+// node load_smoke_check.mjs TWO.json THREE.json FAILING.json
 import { readFileSync } from 'node:fs';
 import assert from 'node:assert/strict';
 
-const [two, three] = process.argv.slice(2).map((f) => JSON.parse(readFileSync(f, 'utf8')));
+const [two, three, failing] = process.argv.slice(2).map((f) => JSON.parse(readFileSync(f, 'utf8')));
 const figures = (s, what) => {
   assert.ok(s.count > 0, `${what}: no samples`);
   for (const p of ['p50', 'p95', 'p99']) assert.ok(typeof s[p] === 'number' && s[p] > 0, `${what}.${p}: ${s[p]}`);
@@ -35,5 +36,10 @@ assert.equal(refused.length, 1);
 assert.equal(refused[0].end, 'refused');
 assert.equal(refused[0].frames, 0);
 assert.ok(three.per_session.filter((s) => s.admitted).every((s) => s.frames > 0));
+const f = failing.per_session[0];
+assert.equal(f.end, 'frames', 'a session whose frames all fail ends at --frames');
+assert.equal(f.frames, 0);
+assert.equal(f.frames_failed, 2);
+assert.ok(failing.errors.total >= 2, `failed frames are errors: ${JSON.stringify(failing.errors)}`);
 console.log(`two sessions: ${two.frames} frames, pose to frame p95 ${two.pose_to_frame_ms.p95} ms, ` +
             `RSS ${(two.rss.max_bytes / 1e6).toFixed(0)} MB; three: one refused (503)`);

@@ -15,6 +15,7 @@ nlohmann::json SessionResult::to_json() const {
           {"fps", std::round(fps() * 100) / 100},
           {"frames", frames},
           {"frames_reduced", frames_reduced},
+          {"frames_failed", frames_failed},
           {"bytes_received", bytes},
           {"poses_sent", poses_sent},
           {"poses_answered", poses_answered},
@@ -151,6 +152,14 @@ void LiveSession::on_text(const std::string& text) {
   } else if (msg["type"] == "error") {
     std::string what = msg.value("error", std::string("(no message)"));
     result_.errors.add("server", msg.contains("frame") ? "frame failed: " + what : what);
+    // A failed frame is an answer too: --frames counts it, so a session whose every frame
+    // fails (a pipeline the scene cannot use) still ends.
+    if (msg.contains("frame")) {
+      ++result_.frames_failed;
+      if (!finishing_ && options_.frames > 0 &&
+          result_.frames + result_.frames_failed >= options_.frames)
+        finish("frames");
+    }
   } else {
     result_.errors.add("protocol", "unknown message type " + msg["type"].dump());
   }

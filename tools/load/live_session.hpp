@@ -26,6 +26,7 @@ struct SessionResult {
   bool admitted = false;  // the upgrade was accepted
   std::string end;        // why it ended: duration, frames, refused, connect, disconnected, stall
   long long frames = 0, frames_reduced = 0, bytes = 0;
+  long long frames_failed = 0;  // frames the server answered with an error instead of an image
   long long poses_sent = 0, poses_answered = 0, poses_coalesced = 0, poses_unanswered = 0;
   long long lights_sent = 0;
   double open_s = 0;           // from the accepted upgrade to the end

@@ -64,7 +64,8 @@ void add_live(CLI::App& live, LoadOptions& o) {
   live.add_option("--rate", o.rate_hz, "Camera messages per second per session")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 1000.0));
-  live.add_option("--frames", o.frames, "Frames per session, then close (0: no bound)")
+  live.add_option("--frames", o.frames,
+                  "Frames per session (images and failed frames), then close (0: no bound)")
       ->capture_default_str()
       ->check(CLI::Range(0LL, 1000000000LL));
   live.add_option("--format", o.format, "Frame format")
