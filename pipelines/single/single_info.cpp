@@ -40,9 +40,8 @@ const SettingsTable<SingleSettings>& single_settings() {
        setting("seed", &S::bake, &B::seed, 0, 1 << 30, baked(), "random seed of the sampling"),
        setting("splat_scale", &S::splat_scale, 0.0, 1.0, frame(),
                "the splat's size over the image's, upsampled along the view rays' chords (0: one "
-               "pixel in s "
-               "x s, s up to 4, while the median Gaussian spans at least 2 of the splat's pixels; "
-               "else at least 0.25)"),
+               "pixel in s x s, s up to 6, while the median Gaussian spans at least 1.5 of the "
+               "splat's pixels; else at least 0.16: one in 6 x 6)"),
        flag("coarse", &S::coarse, frame(),
             "1: splat the bake's coarse set, a quarter of the samples (their progressive order "
             "makes them Poisson-disk) widened by 4^(1/3), with weights fitted for them (the live "
@@ -68,9 +67,9 @@ const SettingsTable<SingleSettings>& single_settings() {
             "Gaussian")},
       [](const SingleSettings& s) {
         s.bake.check();
-        if (s.splat_scale > 0 && s.splat_scale < 0.25)
+        if (s.splat_scale > 0 && s.splat_scale < 0.16)
           throw ValidationError("settings.splat_scale",
-                                "splat_scale must be 0 (auto) or within [0.25, 1] (got " +
+                                "splat_scale must be 0 (auto) or within [0.16, 1] (got " +
                                     std::to_string(s.splat_scale) + ")");
       });
   return table;

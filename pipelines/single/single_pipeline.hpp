@@ -46,21 +46,23 @@ inline bool phase_per_ray(const Scene& scene) {
   return !scene.lights.empty() && std::abs(scene.medium.g) >= kPerRayPhaseG;
 }
 
-// splat_scale 0 (auto) splats one pixel in s x s, s the largest stride (up to 4) at which the
-// median Gaussian's sigma still spans this many of the splat's pixels at the medium's near side,
-// then upsamples along the chords (shaders/single/upsample.frag): the splat's fragments fall s^2
-// times where they are many and the field is smooth over a pixel. Measured at 512 x 512 on the
-// shipped scenes (sigma 8-9 pixels): stride 2 -> 4 is 1.5-2.3x faster and a little closer to the
-// reference (docs/BENCHMARKS.md).
-inline constexpr double kSplatSigmaPx = 2.0;
+// splat_scale 0 (auto) splats one pixel in s x s, s the largest stride (up to kMaxSplatStride)
+// at which the median Gaussian's sigma still spans this many of the splat's pixels at the
+// medium's near side, then upsamples along the chords (shaders/single/upsample.frag): the splat's
+// fragments fall s^2 times where they are many and the field is smooth over a pixel. Measured at
+// 512 x 512 on the shipped scenes (sigma 8-9 pixels): stride 2 -> 4 is 1.5-2.3x faster and a
+// little closer to the reference; 4 -> 5 (1.5 pixels) moved the error by -0.10 to +0.09 points
+// at 0.6-0.8x the splat's time, 6 by up to +0.4 points (docs/BENCHMARKS.md).
+inline constexpr double kSplatSigmaPx = 1.5;
+inline constexpr int kMaxSplatStride = 6;
 
 // The pixels per world unit at the medium's near side (its bounding sphere's), where splat_scale
 // auto measures the Gaussians.
 double near_pixels_per_unit(const Scene& scene);
 // The splat's stride for a splat_scale `scale` (0: auto, by a median Gaussian sigma `sigma`).
 inline int splat_stride(double scale, double sigma, const Scene& scene) {
-  if (scale > 0) return std::clamp(int(std::lround(1 / scale)), 1, 4);
-  return std::clamp(int(sigma * near_pixels_per_unit(scene) / kSplatSigmaPx), 1, 4);
+  if (scale > 0) return std::clamp(int(std::lround(1 / scale)), 1, kMaxSplatStride);
+  return std::clamp(int(sigma * near_pixels_per_unit(scene) / kSplatSigmaPx), 1, kMaxSplatStride);
 }
 
 // The samples a frame splats: all, or (coarse) the bake's coarse set, the first coarse_count of
@@ -81,7 +83,7 @@ DrawnSamples drawn_samples(const SingleBake& bake, bool coarse);
 
 struct SingleSettings {
   SingleBakeParams bake;
-  double splat_scale = 0.0;  // 0: auto (above); else the splat's size over the image's, >= 0.25
+  double splat_scale = 0.0;  // 0: auto (above); else the splat's size over the image's, >= 0.16
   bool coarse = false;  // the bake's coarse set (a quarter of the samples, widened, own weights)
   bool clip_back = true;
   bool exact_tr = true;

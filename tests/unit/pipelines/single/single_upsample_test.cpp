@@ -56,7 +56,7 @@ TEST_F(SinglePipelineTest, HalfSizeSplatKeepsItsPixelsAndInterpolatesTheRest) {
 }
 
 // auto (splat_scale 0) strides so that the median Gaussian spans at least kSplatSigmaPx of the
-// splat's pixels: at 512 x 512 on the sphere, not at 64 x 64; a scale below 0.25 is refused by
+// splat's pixels: at 512 x 512 on the sphere, not at 64 x 64; a scale below 0.16 is refused by
 // name.
 TEST_F(SinglePipelineTest, AutoSplatScaleFollowsTheGaussiansOnScreen) {
   Scene small = small_sphere(64, 32);
@@ -71,7 +71,7 @@ TEST_F(SinglePipelineTest, AutoSplatScaleFollowsTheGaussiansOnScreen) {
   std::vector<float> sigmas = pipeline().current()->sigma;
   std::nth_element(sigmas.begin(), sigmas.begin() + sigmas.size() / 2, sigmas.end());
   const double sigma_px = sigmas[sigmas.size() / 2] * near_pixels_per_unit(large);
-  const int stride = std::clamp(int(sigma_px / kSplatSigmaPx), 1, 4);
+  const int stride = std::clamp(int(sigma_px / kSplatSigmaPx), 1, kMaxSplatStride);
   ASSERT_GE(stride, 2) << sigma_px;
   const std::string side = std::to_string((512 + stride - 1) / stride);
   EXPECT_NE(reason.find("one pixel in " + std::to_string(stride) + " x " + std::to_string(stride) +
