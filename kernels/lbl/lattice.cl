@@ -31,18 +31,14 @@ void collide(__global const float* pt, __global const float* ps, __global const 
   }
 }
 
-// One step over the whole grid (one work item per node, double-buffered f).
-__kernel void lattice_step(int nx, int ny, int nz, int edge_x, int edge_y, int edge_z,
-                           __global const float* pt, __global const float* ps,
-                           __global const float* w, __global const float* src,
-                           __global const float* f_in, __global float* f_out,
-                           __global float* irr) {
-  int3 r = (int3)(get_global_id(0), get_global_id(1), get_global_id(2));
-  if (r.x >= nx || r.y >= ny || r.z >= nz) return;
-  int dims[3] = {nx, ny, nz}, edges[3] = {edge_x, edge_y, edge_z}, rr[3] = {r.x, r.y, r.z};
-  size_t n = (size_t)nx * ny * nz, node = ((size_t)r.z * ny + r.y) * nx + r.x;
-  size_t stride[3] = {1, (size_t)nx, (size_t)nx * ny};
-  float a[6][3], out[6][3], e[3];
+#ifndef LBL_FLUX_CAP
+#define LBL_FLUX_CAP 0.3333333f
+#endif
+
+// a[d][ch]: what arrives at node r along d, f_d(r - c_d), or at an edge what comes in there.
+void pull(const int dims[3], const int edges[3], const int rr[3], size_t node, size_t n,
+          __global const float* f_in, float a[6][3]) {
+  size_t stride[3] = {1, (size_t)dims[0], (size_t)dims[0] * dims[1]};
 #pragma unroll
   for (int d = 0; d < 6; ++d) {
     int axis = d / 2, step = (d & 1) ? -1 : 1;
@@ -59,6 +55,46 @@ __kernel void lattice_step(int nx, int ny, int nz, int edge_x, int edge_y, int e
 #pragma unroll
     for (int ch = 0; ch < 3; ++ch) a[d][ch] = none ? 0.0f : f_in[(from * 3 + ch) * n + src_node];
   }
+}
+
+// The direction of the light at each node, m = J / phi (3 floats per node): J the net power
+// flow along the axes, the mean of what arrives (a_d) and what leaves (f_d), phi the same
+// packets' total, both summed over channels; |m| <= 1. A linearly anisotropic radiance
+// L = (phi + 3 J . w) / (4 pi) carried along the 6 axes gives exactly J / phi, so the view pass
+// can scatter the lattice's light with the phase's first moment (kernels/lbl/view.cl).
+__kernel void lattice_flux(int nx, int ny, int nz, int edge_x, int edge_y, int edge_z,
+                           __global const float* f, __global float* flux) {
+  int3 r = (int3)(get_global_id(0), get_global_id(1), get_global_id(2));
+  if (r.x >= nx || r.y >= ny || r.z >= nz) return;
+  int dims[3] = {nx, ny, nz}, edges[3] = {edge_x, edge_y, edge_z}, rr[3] = {r.x, r.y, r.z};
+  size_t n = (size_t)nx * ny * nz, node = ((size_t)r.z * ny + r.y) * nx + r.x;
+  float a[6][3];
+  pull(dims, edges, rr, node, n, f, a);
+  float p[6], total = 0.0f;
+#pragma unroll
+  for (int d = 0; d < 6; ++d) {
+    p[d] = 0.0f;
+    for (int ch = 0; ch < 3; ++ch) p[d] += 0.5f * (a[d][ch] + f[(d * 3 + ch) * n + node]);
+    total += p[d];
+  }
+  float3 m = total > 0.0f ? (float3)(p[0] - p[1], p[2] - p[3], p[4] - p[5]) / total : (float3)(0.0f);
+  float len = length(m);
+  if (len > LBL_FLUX_CAP) m *= LBL_FLUX_CAP / len;
+  vstore3(m, node, flux);
+}
+
+// One step over the whole grid (one work item per node, double-buffered f).
+__kernel void lattice_step(int nx, int ny, int nz, int edge_x, int edge_y, int edge_z,
+                           __global const float* pt, __global const float* ps,
+                           __global const float* w, __global const float* src,
+                           __global const float* f_in, __global float* f_out,
+                           __global float* irr) {
+  int3 r = (int3)(get_global_id(0), get_global_id(1), get_global_id(2));
+  if (r.x >= nx || r.y >= ny || r.z >= nz) return;
+  int dims[3] = {nx, ny, nz}, edges[3] = {edge_x, edge_y, edge_z}, rr[3] = {r.x, r.y, r.z};
+  size_t n = (size_t)nx * ny * nz, node = ((size_t)r.z * ny + r.y) * nx + r.x;
+  float a[6][3], out[6][3], e[3];
+  pull(dims, edges, rr, node, n, f_in, a);
   collide(pt, ps, w, src, node, a, out, e);
 #pragma unroll
   for (int d = 0; d < 6; ++d)

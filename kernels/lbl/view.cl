@@ -56,12 +56,18 @@ void gather_piece(__global const float* sigma_t, __global const float* sigma_s, 
   *trm = (float3)(tm[0], tm[1], tm[2]);
 }
 
-// The multiple term's emission: the lattice's, isotropic, plus (with_flow) the light the
-// delta-Eddington beam kept forward, scattered with the phase about the light's direction.
+// The multiple term's emission: the lattice's, plus (with_flow) the light the delta-Eddington
+// beam kept forward, scattered with the phase about the light's direction. The lattice's light
+// is isotropic unless g_flux != 0: with its direction m = J / phi per voxel (lattice_flux), a
+// radiance (phi + 3 J . w) / (4 pi) scattered by a phase of first moment g emits
+// (phi + 3 g J . w_out) / (4 pi), so the emission is scaled by 1 + 3 g m . w_out (not below 0).
 float3 multiple_emission(__global const float* deposit, __global const float* irr,
                          __global const float* flow, float w_multiple, float g, int with_flow,
-                         int voxels, int v, float3 to_eye) {
+                         __global const float* lflux, float g_flux, int voxels, int v,
+                         float3 to_eye) {
   float3 e = (float3)(irr[v], irr[v + 1], irr[v + 2]);
+  if (g_flux != 0.0f)
+    e *= fmax(0.0f, 1.0f + 3.0f * g_flux * dot(vload3(v / 3, lflux), to_eye));
   if (with_flow && w_multiple != 0.0f) {
     __global const float* extra = flow + 3 * voxels;
     e += single_phase(deposit, flow, g, v, to_eye) * (float3)(extra[v], extra[v + 1], extra[v + 2]);
@@ -74,7 +80,8 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
                         __global const float* grad_field, __global const float* deposit,
                         __global const float* irr, float w_single, float w_multiple,
                         __global const float* flow, float g_phase, int with_flow,
-                        __global const float* sigma_s, float g_scale, __global const float* camera, int width, int height, int bend,
+                        __global const float* sigma_s, float g_scale, __global const float* lflux,
+                        float g_flux, __global const float* camera, int width, int height, int bend,
                         float delta, __global float* out) {
   int px = get_global_id(0), py = get_global_id(1);
   if (px >= width || py >= height) return;
@@ -95,8 +102,8 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
         int v = 3 * voxel_index(&g, c.x, c.y, c.z);
         gather_piece(sigma_t, sigma_s, g_scale,
                      single_emission(deposit, flow, w_single, g_phase, with_flow, v, -d),
-                     multiple_emission(deposit, irr, flow, w_multiple, g_phase, with_flow,
-                                       nx * ny * nz, v, -d),
+                     multiple_emission(deposit, irr, flow, w_multiple, g_phase, with_flow, lflux,
+                                       g_flux, nx * ny * nz, v, -d),
                      v, b - a, inv_4pi_v, &tr, &trm, &radiance);
       }
     } else {
@@ -115,8 +122,8 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
         int k = 3 * voxel_index(&g, c.x, c.y, c.z);
         float3 e = single_emission(deposit, flow, w_single, g_phase, with_flow, k,
                                    normalize(x0 - x));
-        float3 em = multiple_emission(deposit, irr, flow, w_multiple, g_phase, with_flow,
-                                      nx * ny * nz, k, normalize(x0 - x));
+        float3 em = multiple_emission(deposit, irr, flow, w_multiple, g_phase, with_flow, lflux,
+                                      g_flux, nx * ny * nz, k, normalize(x0 - x));
         gather_piece(sigma_t, sigma_s, g_scale, e, em, k, ds, inv_4pi_v, &tr, &trm, &radiance);
       }
     }

@@ -162,6 +162,14 @@ double Lattice::energy() {
   return total;
 }
 
+void Lattice::flux(cl::Buffer& out) {
+  if (o_.directions != 6) throw std::invalid_argument("the lattice's flux needs 6 directions");
+  cl::Kernel k(cl_.program({"kernels/lbl/lattice.cl"}), "lattice_flux");
+  gpu::set_args(k, nx_, ny_, nz_, int(o_.edges[0]), int(o_.edges[1]), int(o_.edges[2]), f_[cur_],
+                out);
+  cl_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(nx_, ny_, nz_));
+}
+
 std::vector<float> Lattice::irradiance() {
   std::vector<float> irr(3 * n_);
   cl_.queue().enqueueReadBuffer(irr_, CL_TRUE, 0, irr.size() * sizeof(float), irr.data());

@@ -53,6 +53,9 @@ class Lattice {
   // Power scattered per node per step, 3 floats per node.
   std::vector<float> irradiance();
   const cl::Buffer& irradiance_buffer() const { return irr_; }
+  // The light's direction per node, m = J / phi (3 floats per node, |m| <= 1: kernels/lbl/
+  // lattice.cl, lattice_flux), into `out`; the 6-direction lattice only (throws otherwise).
+  void flux(cl::Buffer& out);
   size_t nodes() const { return n_; }
 
   // Steps until, between checks `check_every` steps apart, the relative change of the probes'

@@ -36,6 +36,9 @@ const SettingsTable<LblSettings>& lbl_settings() {
        flag("scaled_view", &S::scaled_view, frame(),
             "1: the view pass gathers the multiple term through the delta-Eddington scaled medium "
             "(sigma_s', sigma_t'), as the lattice carries it; 0: through the real one"),
+       flag("flux_phase", &S::flux_phase, frame(),
+            "1: with g != 0 the lattice's light is scattered towards the eye by 1 + 3 g m . w, m "
+            "its net flux over its total (6 directions, |m| <= 1/3); 0: isotropically"),
        setting("tolerance", &S::tolerance, 1e-6, 0.5, kept("diffusion"),
                "relative change per check that ends the diffusion"),
        setting("max_steps", &S::max_steps, 1, 1000000, kept("diffusion"),

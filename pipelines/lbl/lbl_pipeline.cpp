@@ -81,6 +81,8 @@ struct State {
   cl::Buffer source;   // the lattice's source: the deposit, or with g != 0 the scaled beam's
   cl::Buffer flow;     // with g != 0: the deposit's direction summed over channels (3 per voxel,
                        // the view's phase), then the forward-scattered light's scattering (3)
+  cl::Buffer lattice_flux;    // with g != 0: the lattice's light direction m (3 per voxel)
+  bool flux_current = false;  // lattice_flux is the last diffusion's
   double max_sigma_s = 0;
   bool diffused = false;  // the lattice has converged for the loaded deposit and settings
 };
@@ -88,6 +90,12 @@ struct State {
 }  // namespace lbl
 
 namespace {
+
+// The view scatters the lattice's light with the phase's first moment about its direction
+// (setting flux_phase; the 6-direction lattice's flux only).
+bool uses_flux_phase(const Scene& scene, const LblSettings& s) {
+  return s.flux_phase && scene.medium.g != 0 && s.directions == 6;
+}
 
 // Which stages a frame runs, from the scene, the request and what the last frame left.
 struct Decision {
@@ -181,7 +189,10 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
                           ? "; HG phase (g " + short_number(scene.medium.g) +
                                 ") about the light's direction for the single term and the "
                                 "forward-scattered light, the lattice's (delta-Eddington "
-                                "scaled) light isotropic" +
+                                "scaled) light " +
+                                (uses_flux_phase(scene, s)
+                                     ? std::string("by the phase's first moment about its flux")
+                                     : std::string("isotropic")) +
                                 (s.scaled_view ? " and seen through the scaled medium" : "")
                           : "";
   p.stages.push_back(
@@ -263,6 +274,10 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     next->flow = scene.medium.g == 0 ? next->deposit
                                      : cl::Buffer(cl.context(), CL_MEM_READ_WRITE,
                                                   6 * next->volume.count() * sizeof(float));
+    next->lattice_flux =
+        scene.medium.g == 0 || s.directions != 6
+            ? next->deposit
+            : cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));
     next->material = material_key(scene, s);
     next->density = scene.medium.density;
     state_ = std::move(next);
@@ -314,6 +329,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
         st.lattice->converge(s.tolerance, s.max_steps, s.check_every, request.progress);
     queue.finish();
     st.diffused = true;
+    st.flux_current = false;
     st.diffusion = diffusion_key(s);
     last_steps_ = interleaved_steps + c.steps;
     plan_stage(result.plan, "diffuse").reason +=
@@ -339,11 +355,17 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   cl::Kernel k(cl.program(with_cl_library({"kernels/lbl/common.cl", "kernels/lbl/view.cl"})),
                "view_pass");
   const float w_single = d.single ? 1.f : 0.f, w_multiple = d.multiple && !d.tiny ? 1.f : 0.f;
+  const bool flux_phase = uses_flux_phase(scene, s) && w_multiple != 0;
+  if (flux_phase && !st.flux_current) {
+    st.lattice->flux(st.lattice_flux);
+    st.flux_current = true;
+  }
   const lbl::ClVolume& v = st.device;
   gpu::set_args(k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_t, v.n, v.grad, st.deposit,
                 st.lattice->irradiance_buffer(), w_single, w_multiple, st.flow,
                 float(scene.medium.g), scene.medium.g != 0 ? 1 : 0, v.sigma_s,
-                float(s.scaled_view ? scene.medium.g : 0.0), camera, w, h, d.bend ? 1 : 0,
+                float(s.scaled_view ? scene.medium.g : 0.0), st.lattice_flux,
+                float(flux_phase ? scene.medium.g : 0.0), camera, w, h, d.bend ? 1 : 0,
                 float(s.step * st.volume.voxel), out);
   queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
   queue.finish();

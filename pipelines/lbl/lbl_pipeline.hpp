@@ -45,6 +45,7 @@ struct LblSettings {
   int escape_stride = 2;
   double escape_far = 4;
   bool scaled_view = false;
+  bool flux_phase = false;
   double tolerance = 1e-3;
   int max_steps = 20000;
   int check_every = 16;

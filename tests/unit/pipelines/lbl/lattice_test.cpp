@@ -58,10 +58,31 @@ LatticeOptions closed(bool blocked, int inner = 1) {
           .edges = {Edge::Reflect, Edge::Reflect, Edge::Reflect}};
 }
 
+// What arrives at node (i, j, k) along each direction d, a_d = f_d(r - c_d), or at an edge what
+// comes in there.
+void cpu_arrivals(const LatticeCoefficients& c, const std::array<Edge, 3>& edges,
+                  const std::vector<double>& f, int i, int j, int k, double a[6][3]) {
+  const int dims[3] = {c.nx, c.ny, c.nz};
+  const size_t n = size_t(c.nx) * c.ny * c.nz, node = (size_t(k) * c.ny + j) * c.nx + i;
+  for (int d = 0; d < 6; ++d) {
+    int s[3] = {i, j, k};
+    int axis = d / 2;
+    s[axis] -= (d & 1) ? -1 : 1;
+    bool outside = s[axis] < 0 || s[axis] >= dims[axis];
+    if (outside && edges[axis] == Edge::Periodic) {
+      s[axis] = (s[axis] + dims[axis]) % dims[axis];
+      outside = false;
+    }
+    size_t sn = (size_t(s[2]) * c.ny + s[1]) * c.nx + s[0];
+    for (int ch = 0; ch < 3; ++ch)
+      a[d][ch] = !outside ? f[(d * 3 + ch) * n + sn]
+                          : (edges[axis] == Edge::Reflect ? f[((d ^ 1) * 3 + ch) * n + node] : 0.0);
+  }
+}
+
 // The global step on the CPU, in double: f_d(r) = (1 - pt) a_d + ps/6 sum a + src/6.
 void cpu_step(const LatticeCoefficients& c, const std::vector<float>& src,
               const std::array<Edge, 3>& edges, std::vector<double>& f, std::vector<double>& irr) {
-  const int dims[3] = {c.nx, c.ny, c.nz};
   const size_t n = size_t(c.nx) * c.ny * c.nz;
   std::vector<double> out(f.size());
   irr.assign(3 * n, 0);
@@ -70,21 +91,7 @@ void cpu_step(const LatticeCoefficients& c, const std::vector<float>& src,
       for (int i = 0; i < c.nx; ++i) {
         size_t node = (size_t(k) * c.ny + j) * c.nx + i;
         double a[6][3];
-        for (int d = 0; d < 6; ++d) {
-          int s[3] = {i, j, k};
-          int axis = d / 2;
-          s[axis] -= (d & 1) ? -1 : 1;
-          bool outside = s[axis] < 0 || s[axis] >= dims[axis];
-          if (outside && edges[axis] == Edge::Periodic) {
-            s[axis] = (s[axis] + dims[axis]) % dims[axis];
-            outside = false;
-          }
-          size_t sn = (size_t(s[2]) * c.ny + s[1]) * c.nx + s[0];
-          for (int ch = 0; ch < 3; ++ch)
-            a[d][ch] =
-                !outside ? f[(d * 3 + ch) * n + sn]
-                         : (edges[axis] == Edge::Reflect ? f[((d ^ 1) * 3 + ch) * n + node] : 0.0);
-        }
+        cpu_arrivals(c, edges, f, i, j, k, a);
         for (int ch = 0; ch < 3; ++ch) {
           double sum = 0;
           for (int d = 0; d < 6; ++d) sum += a[d][ch];
@@ -192,6 +199,61 @@ TEST(LblLattice, KernelsMatchACpuStep) {
         ASSERT_NEAR(got_irr[i], irr[i], 1e-5 * (1 + std::abs(irr[i]))) << i;
     }
   }
+}
+
+// The light's direction per node (Lattice::flux): m = J / phi from the mean of what arrives and
+// what leaves, summed over channels, its length at most 1/3, against the same on the CPU.
+TEST(LblLattice, FluxMatchesACpuComputation) {
+  auto c = coefficients(8, [](int, int, int) { return std::pair{0.3f, 0.25f}; });
+  std::vector<float> f0 = random_state(512, 11);
+  for (float& x : f0) x = x * x * x;  // uneven enough that some nodes reach the bound
+  const size_t n = 512;
+  for (auto edges : {std::array{Edge::Open, Edge::Open, Edge::Open},
+                     std::array{Edge::Periodic, Edge::Reflect, Edge::Open}}) {
+    Lattice l(cl(), c, {.blocked = false, .edges = edges});
+    l.set_state(f0);
+    cl::Buffer out(cl().context(), CL_MEM_READ_WRITE, 3 * n * sizeof(float));
+    l.flux(out);
+    std::vector<float> got(3 * n);
+    cl().queue().enqueueReadBuffer(out, CL_TRUE, 0, got.size() * sizeof(float), got.data());
+    std::vector<double> f(f0.begin(), f0.end());
+    int capped = 0;
+    for (int k = 0; k < 8; ++k)
+      for (int j = 0; j < 8; ++j)
+        for (int i = 0; i < 8; ++i) {
+          size_t node = (size_t(k) * 8 + j) * 8 + i;
+          double a[6][3], p[6] = {}, total = 0;
+          cpu_arrivals(c, edges, f, i, j, k, a);
+          for (int d = 0; d < 6; ++d) {
+            for (int ch = 0; ch < 3; ++ch) p[d] += 0.5 * (a[d][ch] + f[(d * 3 + ch) * n + node]);
+            total += p[d];
+          }
+          double m[3] = {(p[0] - p[1]) / total, (p[2] - p[3]) / total, (p[4] - p[5]) / total};
+          double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+          if (len > 1.0 / 3) {
+            ++capped;
+            for (double& x : m) x *= 1.0 / 3 / len;
+          }
+          for (int ax = 0; ax < 3; ++ax) ASSERT_NEAR(got[3 * node + ax], m[ax], 1e-5) << node;
+        }
+    EXPECT_GT(capped, 0) << "no node reached the bound: the test does not check it";
+  }
+  // A uniform linearly anisotropic field, f_d = phi / 6 + (J . c_d) / 2 on every node (periodic):
+  // m is J / phi exactly.
+  const double phi = 6, J[3] = {0.5, -0.3, 0.2};
+  std::vector<float> uniform(18 * n);
+  for (int d = 0; d < 6; ++d)
+    for (int ch = 0; ch < 3; ++ch)
+      for (size_t node = 0; node < n; ++node)
+        uniform[(d * 3 + ch) * n + node] = float((phi / 6 + ((d & 1) ? -0.5 : 0.5) * J[d / 2]) / 3);
+  Lattice l(cl(), c, {.blocked = false, .edges = {Edge::Periodic, Edge::Periodic, Edge::Periodic}});
+  l.set_state(uniform);
+  cl::Buffer out(cl().context(), CL_MEM_READ_WRITE, 3 * n * sizeof(float));
+  l.flux(out);
+  std::vector<float> got(3 * n);
+  cl().queue().enqueueReadBuffer(out, CL_TRUE, 0, got.size() * sizeof(float), got.data());
+  for (size_t node = 0; node < n; ++node)
+    for (int ax = 0; ax < 3; ++ax) ASSERT_NEAR(got[3 * node + ax], J[ax] / phi, 1e-6);
 }
 
 // A homogeneous cube (12^3 nodes of medium inside a 16^3 grid) lit by a source in one corner of
