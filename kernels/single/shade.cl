@@ -16,6 +16,8 @@
 // the model adds 1/2 sum_k c_k (x_k - a_k)^2 (second differences): the Gaussian is also
 // stretched or narrowed per axis (shift[i], axes[i]; see shade_exact).
 
+#define INVISIBLE_DEPTH 40.0f
+
 // Optical depth of the channel mean from o towards d over [0, t1].
 float mean_depth(const Grid* g, __global const float* sigma_t, float3 o, float3 d, float t1) {
   float3 tau = optical_depth3(g, sigma_t, o, d, 0.0f, t1);
@@ -152,12 +154,17 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
     }
     res[ch] = weight[i] * sigma_s[3 * i + ch] * view * sum;
   }
+  // A sample whose light reaches the eye through more than INVISIBLE_DEPTH (exp(-40) = 4e-18 of
+  // what it scatters) in every channel adds nothing: a zero factor, which the splat draws as a
+  // degenerate quad, and no gradient (six DDAs; in a dense medium most samples lie that deep).
+  bool visible = tau_min < INVISIBLE_DEPTH;
+  if (!visible) res[0] = res[1] = res[2] = 0.0f;
   float3 offset = (float3)(0.0f);
   float log_scale = 0.0f;
   float4 depth_cut = (float4)(0.0f);  // zeros: no cut
   float s = sigma[i] * sigma_scale;  // sample_fraction widens the Gaussians of the prefix drawn
   float3 axis = (float3)(s);
-  if (gradient) {
+  if (gradient && visible) {
     float3 curv;
     float3 g = depth_gradient(&grid, sigma_t, b, view_mean, eye, 0, s, vload4(i, planes), &curv);
     if (light_w > 0.0f) {
