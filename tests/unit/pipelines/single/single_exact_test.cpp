@@ -107,6 +107,40 @@ TEST_F(SinglePipelineTest, TransmittanceGradientMatchesTheClosedForm) {
   EXPECT_GT(checked, 200);  // 293 with this bake
 }
 
+// A sample whose light reaches the eye through more than 40 optical depths adds nothing: shade.cl
+// gives it a zero factor (the splat draws nothing) and no gradient. The closed-form box above,
+// denser: the depth, eye plus light, is 2 sigma_t (1 - z) (a_z, the sample's anchor), so samples
+// below z = 1 - 40 / (2 sigma_t) are zero and no move, those above keep their light.
+TEST_F(SinglePipelineTest, SamplesDeeperThanFortyOpticalDepthsAreSkipped) {
+  Scene s = small_box();
+  s.medium.sigma_s = {30, 30, 30};
+  s.medium.sigma_a = {0.5, 0.5, 0.5};
+  s.camera.position = {0, 0, 40};
+  s.camera.target = {0, 0, 0};
+  s.camera.fov_deg = 4;
+  s.lights = {{Light::Type::Directional, {}, Vec3{0, 0, -1}, {1, 1, 1}, 1}};
+  const double st = 30.5, cut = 1 - 40 / (2 * st), margin = 0.15;  // 2.4 voxels
+  pipeline().render(s, {Terms::Single, {{"samples", 20000}, {"directions", 64}}, nullptr});
+  std::vector<float> shaded = pipeline().read_shaded();
+  auto [shifts, axes] = pipeline().read_moves();
+  const SingleBake& b = *pipeline().current();
+  int deep = 0, shallow = 0;
+  for (int i = 0; i < b.count; ++i) {
+    double x = b.depth_at[3 * i], y = b.depth_at[3 * i + 1], z = b.depth_at[3 * i + 2];
+    if (std::abs(x) > 0.8 || std::abs(y) > 0.8) continue;  // the tau above holds inside
+    if (z < cut - margin) {
+      ++deep;
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(shaded[4 * i + c], 0.f) << i << " at z " << z;
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(shifts[4 * i + k], 0.f) << i;
+    } else if (z > cut + margin && z < 0.9 && b.weight[i] > 0) {  // (the fit zeroes a few)
+      ++shallow;
+      EXPECT_GT(shaded[4 * i], 0.f) << i << " at z " << z;
+    }
+  }
+  EXPECT_GT(deep, 1000);
+  EXPECT_GT(shallow, 100);
+}
+
 // exact_tr keeps each light's transmittance while the light stays put: a camera move recomputes
 // none, moving one light of two recomputes that one, and the image matches a fresh pipeline's.
 TEST_F(SinglePipelineTest, ExactTransmittanceIsRecomputedOnlyForLightsThatMoved) {
