@@ -20,7 +20,10 @@ const SettingsTable<ReferenceSettings>& reference_settings() {
                     flag("voxel_boundary", &ReferenceSettings::voxel_boundary, frame(),
                          "1: with ior 1, the voxelized medium alone (each voxel's mean over its "
                          "whole volume: the staircase other pipelines see at the same grid) "
-                         "instead of the density grid bounded by the mesh")});
+                         "instead of the density grid bounded by the mesh"),
+                    flag("cells", &ReferenceSettings::cells, frame(),
+                         "1: the path tracer's mesh queries walk per-voxel triangle lists with "
+                         "the voxel DDA; 0: they traverse the BVH (the same hits)")});
   return table;
 }
 

@@ -8,6 +8,7 @@
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/common/stage_clock.hpp"
 #include "pipelines/metrics.hpp"
+#include "pipelines/reference/cell_triangles.hpp"
 #include "pipelines/reference/convex.hpp"
 #include "pipelines/reference/inside_grid.hpp"
 #include "scene/bvh.hpp"
@@ -51,6 +52,14 @@ double square_scale(const Scene& scene) {
   return power > 0 ? std::clamp(1 / power, 1e-30, 1e30) : 1;
 }
 
+// A read-only buffer of `v` (one element when empty: OpenCL has no empty buffers).
+cl::Buffer upload_ints(gpu::ClContext& cl, const std::vector<int32_t>& v) {
+  cl::Buffer b(cl.context(), CL_MEM_READ_ONLY, std::max<size_t>(v.size(), 1) * sizeof(int32_t));
+  if (!v.empty())
+    cl.queue().enqueueWriteBuffer(b, CL_TRUE, 0, v.size() * sizeof(int32_t), v.data());
+  return b;
+}
+
 }  // namespace
 
 Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
@@ -77,6 +86,11 @@ Plan ReferencePipeline::describe(const Scene& scene, Terms terms,
   else
     p.stages.push_back({"boundary", false,
                         "voxel_boundary=1 and index matched (ior 1): the voxelized medium alone"});
+  if (p.stages.back().run && !marches(s, terms))
+    p.stages.back().reason += s.cells
+                                  ? "; the path tracer's mesh queries walk per-voxel triangle "
+                                    "lists with the voxel DDA (cells=1)"
+                                  : "; the path tracer's mesh queries traverse the BVH (cells=0)";
   p.stages.push_back({"upload", true, "medium, per-brick majorants (8^3 voxels), lights, camera"});
   if (marches(s, terms)) {
     p.stages.push_back(
@@ -108,19 +122,20 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   if (mesh_bounds) restrict_to_mesh(grid);
   clock.stop("voxelize");
   FlatBvh bvh;
+  CellTriangles cells;
+  const bool path_cells = s.cells && !marches(s, request.terms);
   if (mesh_bounds || dielectric) {
     bvh = build_bvh(*scene.mesh);
+    if (path_cells) cells = cell_triangles(grid, bvh);
     clock.stop("boundary");
   }
 
   gpu::ClContext& cl = gpu_.cl();
   cl::Buffer bvh_bounds = upload(cl, bvh.bounds);
   cl::Buffer bvh_tris = upload(cl, bvh.triangles);
-  cl::Buffer bvh_links(cl.context(), CL_MEM_READ_ONLY,
-                       std::max<size_t>(bvh.links.size(), 1) * sizeof(int32_t));
-  if (!bvh.links.empty())
-    cl.queue().enqueueWriteBuffer(bvh_links, CL_TRUE, 0, bvh.links.size() * sizeof(int32_t),
-                                  bvh.links.data());
+  cl::Buffer bvh_links = upload_ints(cl, bvh.links);
+  cl::Buffer cell_first = upload_ints(cl, cells.first);
+  cl::Buffer cell_tris = upload_ints(cl, cells.triangles);
   const float ior = static_cast<float>(scene.medium.ior);
   // How far each voxel is from the boundary, and whether a path once out stays out.
   std::vector<uint8_t> interior =
@@ -193,7 +208,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                   medium.sigma_s, medium.sigma_t, medium.majorant, uniform_buf, lights, light_count,
                   g, camera, w, h, terms, n, done, s.seed, s.max_depth, ior,
                   int(mesh_bounds || dielectric), convex, interior_buf, bvh_bounds, bvh_links,
-                  bvh_tris, float(sq_scale), sum, sum_sq);
+                  bvh_tris, int(!cells.triangles.empty()), cell_first, cell_tris, float(sq_scale),
+                  sum, sum_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     spp = done + n;

@@ -25,6 +25,7 @@ struct ReferenceSettings {
   int max_depth = 1024;
   bool mc = false;
   bool voxel_boundary = false;
+  bool cells = false;
   static ReferenceSettings read(const Settings& settings);
 };
 

@@ -1,0 +1,35 @@
+// Per voxel of the reference's grid, the mesh triangles that overlap it: the exit and first-hit
+// queries of rays inside the medium walk the voxels with the transmittance's own DDA and test only
+// the triangles listed for each voxel they enter (kernels/reference/boundary.cl, cell_search),
+// instead of a BVH traversal per query. The lists are conservative: a triangle is listed for
+// every voxel whose box, grown by a hundredth of a voxel on each side (the DDA's float32
+// rounding), it overlaps by the separating-axis test.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/vec.hpp"
+#include "scene/bvh.hpp"
+#include "scene/voxelizer.hpp"
+
+namespace scatter {
+
+struct CellTriangles {
+  // Per voxel (x fastest) and one more: where its list starts in `triangles`; voxel v's list is
+  // triangles[first[v], first[v + 1]).
+  std::vector<int32_t> first;
+  // Triangle indices into FlatBvh::triangles (12 floats each).
+  std::vector<int32_t> triangles;
+};
+
+// The lists over `grid`'s voxels for the triangles of `bvh` (in its leaf order).
+CellTriangles cell_triangles(const VoxelGrid& grid, const FlatBvh& bvh);
+
+// Whether triangle (a, b, c) and the box [lo, hi] share a point (Akenine-Moller's
+// separating-axis test: the box's three axes, the triangle's normal, the nine edge cross
+// products); touching counts as overlapping.
+bool triangle_box_overlap(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& lo,
+                          const Vec3& hi);
+
+}  // namespace scatter
