@@ -17,6 +17,9 @@ typedef struct {
   __global const int* cell_first;
   __global const int* cell_tris;
   Grid grid;
+  // With the lists: per voxel, how many voxels a ray from it goes before a voxel with a list
+  // (CellTriangles::skip), which the walk jumps.
+  __global const uchar* cell_skip;
 } Bvh;
 
 // How far past a crossing at p the next search starts, so that it does not find the same surface
@@ -62,8 +65,11 @@ bool triangle_hit(__global const float* tri, float3 o, float3 d, float t0, float
 // The closest intersection with t in (t0, t1) through the per-voxel triangle lists: the voxels
 // along the ray, nearest first, each testing the triangles that overlap it; a hit within the
 // voxel just tested is the closest (any nearer one lies in a voxel already tested, whose list
-// holds its triangle), so it ends the walk. The grid covers the mesh: past it nothing is hit.
-bool cell_search(Bvh bvh, float3 o, float3 d, float t0, float t1, float* t_hit, float3* normal) {
+// holds its triangle), so it ends the walk (`first`: any hit does, as mesh_search's). The grid covers the mesh: past it nothing is hit.
+// From a voxel with no list within k + 1 voxels of it (bvh.cell_skip) the walk goes on k voxels
+// further along the ray (a unit direction moves no more than that in any axis), for k >= 2.
+bool cell_search(Bvh bvh, float3 o, float3 d, float t0, float t1, bool first, float* t_hit,
+                 float3* normal) {
   const Grid* g = &bvh.grid;
   float best = t1, g0, g1;
   bool found = false;
@@ -78,9 +84,19 @@ bool cell_search(Bvh bvh, float3 o, float3 d, float t0, float t1, float* t_hit, 
   int3 c;
   while (dda_next(&s, &a, &b, &c)) {
     int v = voxel_index(g, c.x, c.y, c.z);
+    int skip = bvh.cell_skip[v];
+    if (skip >= 2) {
+      float t = a + skip * g->voxel;
+      if (t >= g1) break;
+      dda_init(&s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), t, g1);
+      continue;
+    }
     for (int i = bvh.cell_first[v], end = bvh.cell_first[v + 1]; i < end; ++i)
-      found |= triangle_hit(bvh.tris + 12 * bvh.cell_tris[i], o, d, t0, &best, normal);
-    if (found && best <= b) break;
+      if (triangle_hit(bvh.tris + 12 * bvh.cell_tris[i], o, d, t0, &best, normal)) {
+        found = true;
+        if (first) break;
+      }
+    if (found && (first || best <= b)) break;
   }
   *t_hit = best;
   return found;
@@ -94,7 +110,7 @@ bool cell_search(Bvh bvh, float3 o, float3 d, float t0, float t1, float* t_hit, 
 // lists (bvh.cell_first) the voxel walk answers instead (cell_search).
 bool mesh_search(Bvh bvh, float3 o, float3 d, float t0, float t1, bool first, float* t_hit,
                  float3* normal) {
-  if (bvh.cell_first) return cell_search(bvh, o, d, t0, t1, t_hit, normal);
+  if (bvh.cell_first) return cell_search(bvh, o, d, t0, t1, first, t_hit, normal);
   float3 inv = 1.0f / d;
   int stack[64];
   float entry[64];

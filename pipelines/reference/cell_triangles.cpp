@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 
+#include "pipelines/reference/inside_grid.hpp"
+
 namespace scatter {
 namespace {
 
@@ -70,6 +72,12 @@ CellTriangles cell_triangles(const VoxelGrid& grid, const FlatBvh& bvh) {
     out.triangles.push_back(t);
   }
   for (size_t v = 0; v < grid.count(); ++v) out.first[v + 1] += out.first[v];
+  // A point in voxel v moving k < D voxels stays in voxels within D - 1 of v, D the distance.
+  std::vector<int> d(grid.count());
+  for (size_t v = 0; v < d.size(); ++v) d[v] = out.first[v + 1] > out.first[v] ? 0 : 256;
+  chebyshev_distance(grid, d);
+  out.skip.resize(d.size());
+  for (size_t v = 0; v < d.size(); ++v) out.skip[v] = uint8_t(std::clamp(d[v] - 1, 0, 255));
   return out;
 }
 

@@ -21,6 +21,10 @@ struct CellTriangles {
   std::vector<int32_t> first;
   // Triangle indices into FlatBvh::triangles (12 floats each).
   std::vector<int32_t> triangles;
+  // Per voxel, how far (in voxels, any direction) a ray from any point of it goes without
+  // entering a voxel with a list: the Chebyshev distance to the nearest such voxel less one,
+  // capped at 255; the walk jumps that far.
+  std::vector<uint8_t> skip;
 };
 
 // The lists over `grid`'s voxels for the triangles of `bvh` (in its leaf order).

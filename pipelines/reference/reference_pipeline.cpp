@@ -136,6 +136,9 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   cl::Buffer bvh_links = upload_ints(cl, bvh.links);
   cl::Buffer cell_first = upload_ints(cl, cells.first);
   cl::Buffer cell_tris = upload_ints(cl, cells.triangles);
+  cells.skip.resize(std::max<size_t>(cells.skip.size(), 1));
+  cl::Buffer cell_skip(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, cells.skip.size(),
+                       cells.skip.data());
   const float ior = static_cast<float>(scene.medium.ior);
   // How far each voxel is from the boundary, and whether a path once out stays out.
   std::vector<uint8_t> interior =
@@ -208,8 +211,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                   medium.sigma_s, medium.sigma_t, medium.majorant, uniform_buf, lights, light_count,
                   g, camera, w, h, terms, n, done, s.seed, s.max_depth, ior,
                   int(mesh_bounds || dielectric), convex, interior_buf, bvh_bounds, bvh_links,
-                  bvh_tris, int(!cells.triangles.empty()), cell_first, cell_tris, float(sq_scale),
-                  sum, sum_sq);
+                  bvh_tris, int(!cells.triangles.empty()), cell_first, cell_tris, cell_skip,
+                  float(sq_scale), sum, sum_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     spp = done + n;

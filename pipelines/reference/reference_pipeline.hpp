@@ -25,7 +25,7 @@ struct ReferenceSettings {
   int max_depth = 1024;
   bool mc = false;
   bool voxel_boundary = false;
-  bool cells = false;
+  bool cells = true;
   static ReferenceSettings read(const Settings& settings);
 };
 

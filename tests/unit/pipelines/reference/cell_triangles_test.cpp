@@ -147,6 +147,8 @@ TEST(CellTriangles, KernelHitsMatchTheBvh) {
                         v.size() * sizeof(int32_t), const_cast<int32_t*>(v.data()));
     };
     cl::Buffer links = ints(bvh.links), first = ints(cells.first), list = ints(cells.triangles);
+    cl::Buffer skip(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, cells.skip.size(),
+                    const_cast<uint8_t*>(cells.skip.data()));
     cl::Kernel k(cl.program(with_cl_library(
                      {"kernels/reference/boundary.cl", "kernels/reference/mesh_hits.cl"})),
                  "mesh_hits");
@@ -155,7 +157,7 @@ TEST(CellTriangles, KernelHitsMatchTheBvh) {
       cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, 4 * n * sizeof(float));
       cl_float3 origin = {{float(grid.origin.x), float(grid.origin.y), float(grid.origin.z)}};
       gpu::set_args(k, origin, float(grid.voxel), grid.nx, grid.ny, grid.nz, bounds, links, tris,
-                    use_cells, first, list, ray_buf, out);
+                    use_cells, first, list, skip, ray_buf, out);
       cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(n));
       cl.queue().enqueueReadBuffer(out, CL_TRUE, 0, 4 * n * sizeof(float), hits[use_cells].data());
     }
