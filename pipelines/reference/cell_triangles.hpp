@@ -30,6 +30,12 @@ struct CellTriangles {
 // The lists over `grid`'s voxels for the triangles of `bvh` (in its leaf order).
 CellTriangles cell_triangles(const VoxelGrid& grid, const FlatBvh& bvh);
 
+// Whether the lists answer the path tracer's queries faster than the BVH, as measured
+// (docs/BENCHMARKS.md, ref22): on a mesh of 1000 triangles or more whose listed voxels hold 8 or
+// fewer on average. The 9024-triangle sphere at 64 voxels (3.8 a voxel) gains; the 12-triangle
+// cube (whose BVH is a few boxes) and the 70k-triangle bunny (12.6 a voxel) lose.
+bool uses_cell_lists(const CellTriangles& cells, const FlatBvh& bvh);
+
 // Whether triangle (a, b, c) and the box [lo, hi] share a point (Akenine-Moller's
 // separating-axis test: the box's three axes, the triangle's normal, the nine edge cross
 // products); touching counts as overlapping.

@@ -21,9 +21,10 @@ const SettingsTable<ReferenceSettings>& reference_settings() {
                          "1: with ior 1, the voxelized medium alone (each voxel's mean over its "
                          "whole volume: the staircase other pipelines see at the same grid) "
                          "instead of the density grid bounded by the mesh"),
-                    flag("cells", &ReferenceSettings::cells, frame(),
-                         "1: the path tracer's mesh queries walk per-voxel triangle lists with "
-                         "the voxel DDA; 0: they traverse the BVH (the same hits)")});
+                    setting("cells", &ReferenceSettings::cells, 0, 2, frame(),
+                            "the path tracer's mesh queries (the same hits): 0 traverse the BVH, "
+                            "1 walk per-voxel triangle lists with the voxel DDA, 2 the lists "
+                            "where they are short on a large mesh (uses_cell_lists)")});
   return table;
 }
 

@@ -86,11 +86,15 @@ Plan ReferencePipeline::describe(const Scene& scene, Terms terms,
   else
     p.stages.push_back({"boundary", false,
                         "voxel_boundary=1 and index matched (ior 1): the voxelized medium alone"});
-  if (p.stages.back().run && !marches(s, terms))
-    p.stages.back().reason += s.cells
-                                  ? "; the path tracer's mesh queries walk per-voxel triangle "
-                                    "lists with the voxel DDA (cells=1)"
-                                  : "; the path tracer's mesh queries traverse the BVH (cells=0)";
+  if (p.stages.back().run && !marches(s, terms)) {
+    const char* queries[] = {
+        "; the path tracer's mesh queries traverse the BVH (cells=0)",
+        "; the path tracer's mesh queries walk per-voxel triangle lists with the voxel DDA "
+        "(cells=1)",
+        "; the path tracer's mesh queries walk per-voxel triangle lists with the voxel DDA where "
+        "the lists are short on a large mesh, else traverse the BVH (cells=2)"};
+    p.stages.back().reason += queries[std::clamp(s.cells, 0, 2)];
+  }
   p.stages.push_back({"upload", true, "medium, per-brick majorants (8^3 voxels), lights, camera"});
   if (marches(s, terms)) {
     p.stages.push_back(
@@ -123,12 +127,17 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   clock.stop("voxelize");
   FlatBvh bvh;
   CellTriangles cells;
-  const bool path_cells = s.cells && !marches(s, request.terms);
   if (mesh_bounds || dielectric) {
     bvh = build_bvh(*scene.mesh);
-    if (path_cells) cells = cell_triangles(grid, bvh);
+    if (s.cells > 0 && !marches(s, request.terms)) {
+      cells = cell_triangles(grid, bvh);
+      if (s.cells == 2 && !uses_cell_lists(cells, bvh)) cells = {};
+    }
     clock.stop("boundary");
   }
+  if (s.cells == 2 && (mesh_bounds || dielectric) && !marches(s, request.terms))
+    plan_stage(result.plan, "boundary").reason +=
+        cells.triangles.empty() ? ": the BVH" : ": the lists";
 
   gpu::ClContext& cl = gpu_.cl();
   cl::Buffer bvh_bounds = upload(cl, bvh.bounds);

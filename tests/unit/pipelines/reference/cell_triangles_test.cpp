@@ -103,6 +103,16 @@ TEST(CellTriangles, EveryVoxelListsTheTrianglesOverlappingIt) {
   }
 }
 
+// The lists are chosen where they were measured faster (docs/BENCHMARKS.md, ref22): the
+// finely tessellated sphere, not the 12-triangle cube nor the bunny's long lists.
+TEST(CellTriangles, ListsAreUsedOnTheFineSphereOnly) {
+  Lists sphere = lists_for("sphere", 64), cube = lists_for("layers", 64),
+        bunny = lists_for("bunny", 64);
+  EXPECT_TRUE(uses_cell_lists(sphere.cells, sphere.bvh));
+  EXPECT_FALSE(uses_cell_lists(cube.cells, cube.bvh));
+  EXPECT_FALSE(uses_cell_lists(bunny.cells, bunny.bvh));
+}
+
 // The kernels' closest hits through the voxels' triangle lists are the BVH's: the same distance
 // (the same triangle test, so equal up to float rounding where two triangles meet) and the same
 // side of the surface, for rays from inside the medium (collision vertices, tmin 0), from
