@@ -42,7 +42,7 @@ bool triangle_box_overlap(const Vec3& a, const Vec3& b, const Vec3& c, const Vec
 bool uses_cell_lists(const CellTriangles& cells, const FlatBvh& bvh) {
   size_t listed = 0;
   for (size_t v = 0; v + 1 < cells.first.size(); ++v) listed += cells.first[v + 1] > cells.first[v];
-  return bvh.triangles.size() / 12 >= 1000 && listed > 0 &&
+  return bvh.triangles.size() / 12 >= kCellListsMinTriangles && listed > 0 &&
          double(cells.triangles.size()) <= 8.0 * double(listed);
 }
 

@@ -35,6 +35,9 @@ CellTriangles cell_triangles(const VoxelGrid& grid, const FlatBvh& bvh);
 // fewer on average. The 9024-triangle sphere at 64 voxels (3.8 a voxel) gains; the 12-triangle
 // cube (whose BVH is a few boxes) and the 70k-triangle bunny (12.6 a voxel) lose.
 bool uses_cell_lists(const CellTriangles& cells, const FlatBvh& bvh);
+// The least triangles of a mesh on which uses_cell_lists may say yes (below, the lists need not
+// be built to know).
+inline constexpr size_t kCellListsMinTriangles = 1000;
 
 // Whether triangle (a, b, c) and the box [lo, hi] share a point (Akenine-Moller's
 // separating-axis test: the box's three axes, the triangle's normal, the nine edge cross

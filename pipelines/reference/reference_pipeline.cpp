@@ -129,7 +129,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   CellTriangles cells;
   if (mesh_bounds || dielectric) {
     bvh = build_bvh(*scene.mesh);
-    if (s.cells > 0 && !marches(s, request.terms)) {
+    const bool large = bvh.triangles.size() / 12 >= kCellListsMinTriangles;
+    if ((s.cells == 1 || (s.cells == 2 && large)) && !marches(s, request.terms)) {
       cells = cell_triangles(grid, bvh);
       if (s.cells == 2 && !uses_cell_lists(cells, bvh)) cells = {};
     }
