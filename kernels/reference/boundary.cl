@@ -65,7 +65,8 @@ bool triangle_hit(__global const float* tri, float3 o, float3 d, float t0, float
 // The closest intersection with t in (t0, t1) through the per-voxel triangle lists: the voxels
 // along the ray, nearest first, each testing the triangles that overlap it; a hit within the
 // voxel just tested is the closest (any nearer one lies in a voxel already tested, whose list
-// holds its triangle), so it ends the walk (`first`: any hit does, as mesh_search's). The grid covers the mesh: past it nothing is hit.
+// holds its triangle), so it ends the walk (`first`: any hit does, as mesh_search's). The grid
+// covers the mesh: past it nothing is hit.
 // From a voxel with no list within k + 1 voxels of it (bvh.cell_skip) the walk goes on k voxels
 // further along the ray (a unit direction moves no more than that in any axis), for k >= 2.
 bool cell_search(Bvh bvh, float3 o, float3 d, float t0, float t1, bool first, float* t_hit,
