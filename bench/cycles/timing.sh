@@ -6,12 +6,15 @@
 # CPU time (user + system, which a loaded machine disturbs less; each renderer's start-up, taken
 # from a run of 4 samples, subtracted).
 # Usage: bench/cycles/timing.sh BEFORE_SCATTERD   (e.g. /work/main/build/scatterd)
+# Environment: ROUNDS (3), SPP_REF (512), SPP_CYCLES (256), CYCLES (1; 0: the two references
+# alone, without Blender), AFTER (build/scatterd).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 before=${1:?usage: bench/cycles/timing.sh BEFORE_SCATTERD}
 out=bench/out/cycles
 spp_ref=${SPP_REF:-512}
 spp_cycles=${SPP_CYCLES:-256}
+after=${AFTER:-build/scatterd}
 cpu() { awk '{print $1 + $2}' "$out/timing-cpu.txt"; }
 ref() {  # BINARY SCENE SPP: "wall-ms cpu-s"
   /usr/bin/time -f "%U %S" -o "$out/timing-cpu.txt" "$1" render "$2" --pipeline reference \
@@ -31,7 +34,8 @@ for _ in $(seq 1 "${ROUNDS:-3}"); do
   for g in 0 0.7; do
     s=$out/sphere-g$g.json
     per before "$g" "$(ref "$before" "$s" "$spp_ref")" "$(ref "$before" "$s" 4)" "$spp_ref"
-    per after "$g" "$(ref build/scatterd "$s" "$spp_ref")" "$(ref build/scatterd "$s" 4)" "$spp_ref"
-    per cycles "$g" "$(cycles "$g" "$spp_cycles")" "$(cycles "$g" 4)" "$spp_cycles"
+    per after "$g" "$(ref "$after" "$s" "$spp_ref")" "$(ref "$after" "$s" 4)" "$spp_ref"
+    [ "${CYCLES:-1}" = 0 ] ||
+      per cycles "$g" "$(cycles "$g" "$spp_cycles")" "$(cycles "$g" 4)" "$spp_cycles"
   done
 done

@@ -12,6 +12,14 @@ typedef struct {
   __global const int* links;     // 2 ints per node
   __global const float* tris;    // 12 floats per triangle
   float eps;                     // the scene's smallest step past a crossing (a voxel's 1e-3)
+  // Optional (null: the BVH answers every query): per voxel of `grid` and one more, where its
+  // list of overlapping triangles starts in cell_tris (pipelines/reference/cell_triangles.hpp).
+  __global const int* cell_first;
+  __global const int* cell_tris;
+  Grid grid;
+  // With the lists: per voxel, how many voxels a ray from it goes before a voxel with a list
+  // (CellTriangles::skip), which the walk jumps.
+  __global const uchar* cell_skip;
 } Bvh;
 
 // How far past a crossing at p the next search starts, so that it does not find the same surface
@@ -32,13 +40,78 @@ float box_entry(__global const float* b, float3 o, float3 inv, float t0, float t
   return n <= f ? n : INFINITY;
 }
 
+// Moller-Trumbore: whether o + t d meets triangle `tri` (12 floats) at t in (t0, *best); then
+// *best is that t and *normal the triangle's unit normal.
+bool triangle_hit(__global const float* tri, float3 o, float3 d, float t0, float* best,
+                  float3* normal) {
+  float3 v0 = (float3)(tri[0], tri[1], tri[2]);
+  float3 e1 = (float3)(tri[4], tri[5], tri[6]) - v0, e2 = (float3)(tri[8], tri[9], tri[10]) - v0;
+  float3 p = cross(d, e2);
+  float det = dot(e1, p);
+  if (fabs(det) < 1e-20f) return false;
+  float3 s = o - v0;
+  float u = dot(s, p) / det;
+  if (u < 0.0f || u > 1.0f) return false;
+  float3 q = cross(s, e1);
+  float v = dot(d, q) / det;
+  if (v < 0.0f || u + v > 1.0f) return false;
+  float th = dot(e2, q) / det;
+  if (!(th > t0 && th < *best)) return false;
+  *best = th;
+  *normal = normalize(cross(e1, e2));
+  return true;
+}
+
+// The closest intersection with t in (t0, t1) through the per-voxel triangle lists: the voxels
+// along the ray, nearest first, each testing the triangles that overlap it; a hit within the
+// voxel just tested is the closest (any nearer one lies in a voxel already tested, whose list
+// holds its triangle), so it ends the walk (`first`: any hit does, as mesh_search's). The grid
+// covers the mesh: past it nothing is hit.
+// From a voxel with no list within k + 1 voxels of it (bvh.cell_skip) the walk goes on k voxels
+// further along the ray (a unit direction moves no more than that in any axis), for k >= 2.
+bool cell_search(Bvh bvh, float3 o, float3 d, float t0, float t1, bool first, float* t_hit,
+                 float3* normal) {
+  const Grid* g = &bvh.grid;
+  float best = t1, g0, g1;
+  bool found = false;
+  *t_hit = t1;
+  if (!grid_interval(g, o, d, &g0, &g1)) return false;
+  g0 = fmax(g0, t0);
+  g1 = fmin(g1, t1);
+  if (g1 <= g0) return false;
+  Dda s;
+  dda_init(&s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), g0, g1);
+  float a, b;
+  int3 c;
+  while (dda_next(&s, &a, &b, &c)) {
+    int v = voxel_index(g, c.x, c.y, c.z);
+    int skip = bvh.cell_skip[v];
+    if (skip >= 2) {
+      float t = a + skip * g->voxel;
+      if (t >= g1) break;
+      dda_init(&s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), t, g1);
+      continue;
+    }
+    for (int i = bvh.cell_first[v], end = bvh.cell_first[v + 1]; i < end; ++i)
+      if (triangle_hit(bvh.tris + 12 * bvh.cell_tris[i], o, d, t0, &best, normal)) {
+        found = true;
+        if (first) break;
+      }
+    if (found && (first || best <= b)) break;
+  }
+  *t_hit = best;
+  return found;
+}
+
 // Closest intersection with t in (t0, t1): its distance and the triangle's unit normal (outward
 // for a mesh wound counter-clockwise seen from outside, as scene meshes are). Children are
 // visited nearer first, and a box entered past the closest hit so far is skipped. `first`: the
 // first intersection found ends the search, for a ray that crosses the mesh once in (t0, t1)
-// (from inside a convex mesh), where the first found is the closest.
+// (from inside a convex mesh), where the first found is the closest. With the voxels' triangle
+// lists (bvh.cell_first) the voxel walk answers instead (cell_search).
 bool mesh_search(Bvh bvh, float3 o, float3 d, float t0, float t1, bool first, float* t_hit,
                  float3* normal) {
+  if (bvh.cell_first) return cell_search(bvh, o, d, t0, t1, first, t_hit, normal);
   float3 inv = 1.0f / d;
   int stack[64];
   float entry[64];
@@ -78,22 +151,7 @@ bool mesh_search(Bvh bvh, float3 o, float3 d, float t0, float t1, bool first, fl
       continue;
     }
     for (int i = 0; i < count; ++i) {
-      __global const float* t = bvh.tris + 12 * (a + i);
-      float3 v0 = (float3)(t[0], t[1], t[2]);
-      float3 e1 = (float3)(t[4], t[5], t[6]) - v0, e2 = (float3)(t[8], t[9], t[10]) - v0;
-      float3 p = cross(d, e2);
-      float det = dot(e1, p);
-      if (fabs(det) < 1e-20f) continue;
-      float3 s = o - v0;
-      float u = dot(s, p) / det;
-      if (u < 0.0f || u > 1.0f) continue;
-      float3 q = cross(s, e1);
-      float v = dot(d, q) / det;
-      if (v < 0.0f || u + v > 1.0f) continue;
-      float th = dot(e2, q) / det;
-      if (th > t0 && th < best) {
-        best = th;
-        *normal = normalize(cross(e1, e2));
+      if (triangle_hit(bvh.tris + 12 * (a + i), o, d, t0, &best, normal)) {
         found = true;
         if (first) {
           *t_hit = best;

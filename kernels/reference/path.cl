@@ -54,14 +54,19 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
                          int spp, int first_sample, uint seed, int max_depth, float ior,
                          int use_mesh, int convex, __global const uchar* interior,
                          __global const float* bvh_bounds, __global const int* bvh_links,
-                         __global const float* bvh_tris, float sq_scale, __global float* sum,
+                         __global const float* bvh_tris, int cells,
+                         __global const int* cell_first, __global const int* cell_tris,
+                         __global const uchar* cell_skip,
+                         float sq_scale, __global float* sum,
                          __global float* sum_sq) {
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
   Medium md = {make_grid(origin, voxel, nx, ny, nz, brick, bx, by, bz), sigma_s, sigma_t, majorant,
                uniform};
   const Grid* g = &md.g;
-  Bvh bvh = {bvh_bounds, bvh_links, bvh_tris, 1e-3f * voxel};
+  // cells: the mesh queries walk the voxels' triangle lists instead of the BVH (boundary.cl).
+  Bvh bvh = {bvh_bounds, bvh_links, bvh_tris, 1e-3f * voxel, cells ? cell_first : 0,
+             cell_tris, md.g, cell_skip};
   Cam cam = load_camera(camera);
   float3 d0 = camera_ray(cam, x, y, width, height, 0.5f, 0.5f);
   float3 acc = (float3)(0.0f), acc2 = (float3)(0.0f);

@@ -54,6 +54,14 @@ std::vector<uint8_t> interior_depth(const VoxelGrid& grid) {
   const int cap = 256;
   std::vector<int> d(grid.count());
   for (size_t v = 0; v < d.size(); ++v) d[v] = grid.occupancy[v] >= 1.0f ? cap : 0;
+  chebyshev_distance(grid, d);
+  std::vector<uint8_t> out(d.size());
+  // Less one more: a sliver of surface the supersampling missed may sit in a voxel counted full.
+  for (size_t v = 0; v < d.size(); ++v) out[v] = uint8_t(std::clamp(d[v] - 2, 0, 255));
+  return out;
+}
+
+void chebyshev_distance(const VoxelGrid& grid, std::vector<int>& d) {
   // Two raster passes over the 26-neighbourhood give the exact Chebyshev distance.
   auto pass = [&](int sign) {
     int k0 = sign > 0 ? 0 : grid.nz - 1, j0 = sign > 0 ? 0 : grid.ny - 1,
@@ -79,10 +87,6 @@ std::vector<uint8_t> interior_depth(const VoxelGrid& grid) {
   };
   pass(1);
   pass(-1);
-  std::vector<uint8_t> out(d.size());
-  // Less one more: a sliver of surface the supersampling missed may sit in a voxel counted full.
-  for (size_t v = 0; v < d.size(); ++v) out[v] = uint8_t(std::clamp(d[v] - 2, 0, 255));
-  return out;
 }
 
 }  // namespace scatter

@@ -29,6 +29,11 @@ namespace scatter {
 // free flight or shadow ray tracks that far without asking the mesh.
 std::vector<uint8_t> interior_depth(const VoxelGrid& grid);
 
+// In place, over `grid`'s voxels: d[v] becomes the least of d[v] and, for every voxel u,
+// d[u] plus the Chebyshev distance from v to u (so the distance to the nearest voxel holding 0,
+// where the others start high); the voxels past the grid count as 0.
+void chebyshev_distance(const VoxelGrid& grid, std::vector<int>& d);
+
 }  // namespace scatter
 
 namespace scatter {

@@ -20,7 +20,11 @@ const SettingsTable<ReferenceSettings>& reference_settings() {
                     flag("voxel_boundary", &ReferenceSettings::voxel_boundary, frame(),
                          "1: with ior 1, the voxelized medium alone (each voxel's mean over its "
                          "whole volume: the staircase other pipelines see at the same grid) "
-                         "instead of the density grid bounded by the mesh")});
+                         "instead of the density grid bounded by the mesh"),
+                    setting("cells", &ReferenceSettings::cells, 0, 2, frame(),
+                            "the path tracer's mesh queries (the same hits): 0 traverse the BVH, "
+                            "1 walk per-voxel triangle lists with the voxel DDA, 2 the lists "
+                            "where they are short on a large mesh (uses_cell_lists)")});
   return table;
 }
 

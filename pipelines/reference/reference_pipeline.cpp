@@ -8,6 +8,7 @@
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/common/stage_clock.hpp"
 #include "pipelines/metrics.hpp"
+#include "pipelines/reference/cell_triangles.hpp"
 #include "pipelines/reference/convex.hpp"
 #include "pipelines/reference/inside_grid.hpp"
 #include "scene/bvh.hpp"
@@ -51,6 +52,14 @@ double square_scale(const Scene& scene) {
   return power > 0 ? std::clamp(1 / power, 1e-30, 1e30) : 1;
 }
 
+// A read-only buffer of `v` (one element when empty: OpenCL has no empty buffers).
+cl::Buffer upload_ints(gpu::ClContext& cl, const std::vector<int32_t>& v) {
+  cl::Buffer b(cl.context(), CL_MEM_READ_ONLY, std::max<size_t>(v.size(), 1) * sizeof(int32_t));
+  if (!v.empty())
+    cl.queue().enqueueWriteBuffer(b, CL_TRUE, 0, v.size() * sizeof(int32_t), v.data());
+  return b;
+}
+
 }  // namespace
 
 Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
@@ -77,6 +86,15 @@ Plan ReferencePipeline::describe(const Scene& scene, Terms terms,
   else
     p.stages.push_back({"boundary", false,
                         "voxel_boundary=1 and index matched (ior 1): the voxelized medium alone"});
+  if (p.stages.back().run && !marches(s, terms)) {
+    const char* queries[] = {
+        "; the path tracer's mesh queries traverse the BVH (cells=0)",
+        "; the path tracer's mesh queries walk per-voxel triangle lists with the voxel DDA "
+        "(cells=1)",
+        "; the path tracer's mesh queries walk per-voxel triangle lists with the voxel DDA where "
+        "the lists are short on a large mesh, else traverse the BVH (cells=2)"};
+    p.stages.back().reason += queries[std::clamp(s.cells, 0, 2)];
+  }
   p.stages.push_back({"upload", true, "medium, per-brick majorants (8^3 voxels), lights, camera"});
   if (marches(s, terms)) {
     p.stages.push_back(
@@ -108,19 +126,29 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   if (mesh_bounds) restrict_to_mesh(grid);
   clock.stop("voxelize");
   FlatBvh bvh;
+  CellTriangles cells;
   if (mesh_bounds || dielectric) {
     bvh = build_bvh(*scene.mesh);
+    const bool large = bvh.triangles.size() / 12 >= kCellListsMinTriangles;
+    if ((s.cells == 1 || (s.cells == 2 && large)) && !marches(s, request.terms)) {
+      cells = cell_triangles(grid, bvh);
+      if (s.cells == 2 && !uses_cell_lists(cells, bvh)) cells = {};
+    }
     clock.stop("boundary");
   }
+  if (s.cells == 2 && (mesh_bounds || dielectric) && !marches(s, request.terms))
+    plan_stage(result.plan, "boundary").reason +=
+        cells.triangles.empty() ? ": the BVH" : ": the lists";
 
   gpu::ClContext& cl = gpu_.cl();
   cl::Buffer bvh_bounds = upload(cl, bvh.bounds);
   cl::Buffer bvh_tris = upload(cl, bvh.triangles);
-  cl::Buffer bvh_links(cl.context(), CL_MEM_READ_ONLY,
-                       std::max<size_t>(bvh.links.size(), 1) * sizeof(int32_t));
-  if (!bvh.links.empty())
-    cl.queue().enqueueWriteBuffer(bvh_links, CL_TRUE, 0, bvh.links.size() * sizeof(int32_t),
-                                  bvh.links.data());
+  cl::Buffer bvh_links = upload_ints(cl, bvh.links);
+  cl::Buffer cell_first = upload_ints(cl, cells.first);
+  cl::Buffer cell_tris = upload_ints(cl, cells.triangles);
+  cells.skip.resize(std::max<size_t>(cells.skip.size(), 1));
+  cl::Buffer cell_skip(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, cells.skip.size(),
+                       cells.skip.data());
   const float ior = static_cast<float>(scene.medium.ior);
   // How far each voxel is from the boundary, and whether a path once out stays out.
   std::vector<uint8_t> interior =
@@ -193,7 +221,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                   medium.sigma_s, medium.sigma_t, medium.majorant, uniform_buf, lights, light_count,
                   g, camera, w, h, terms, n, done, s.seed, s.max_depth, ior,
                   int(mesh_bounds || dielectric), convex, interior_buf, bvh_bounds, bvh_links,
-                  bvh_tris, float(sq_scale), sum, sum_sq);
+                  bvh_tris, int(!cells.triangles.empty()), cell_first, cell_tris, cell_skip,
+                  float(sq_scale), sum, sum_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     spp = done + n;

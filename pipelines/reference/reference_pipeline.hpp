@@ -25,6 +25,7 @@ struct ReferenceSettings {
   int max_depth = 1024;
   bool mc = false;
   bool voxel_boundary = false;
+  int cells = 2;  // the mesh queries: 0 the BVH, 1 the voxels' lists, 2 whichever suits the mesh
   static ReferenceSettings read(const Settings& settings);
 };
 
