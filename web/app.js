@@ -10,7 +10,7 @@
 const $ = (id) => document.getElementById(id);
 const canvas = $('view'), ctx = canvas.getContext('2d'), marker = $('marker');
 const state = {
-  ws: null, frames: 0, header: null, fpsFrames: 0, fpsSince: performance.now(),
+  ws: null, frames: 0, header: null, fpsFrames: 0, fpsSince: performance.now(), lastFrameAt: 0,
   orbit: { yaw: 0, pitch: 0.05, radius: 4, target: [0, 0, 0], fov: 40, up: [0, 1, 0] },
   radiusRange: [1.2, 40], lights: [], revision: 0, lightRevision: 0, request: 0,
   sentAt: new Map(),  // revision key -> when the change was sent (round trip: change to its frame)
@@ -212,6 +212,7 @@ function frameArrived(header, bitmap) {
   ctx.drawImage(bitmap, 0, 0, canvas.width, canvas.height);  // reduced frames scaled up
   state.frames += 1;
   state.fpsFrames += 1;
+  state.lastFrameAt = performance.now();
   $('frames').textContent = state.frames;
   // Round trip: from the change this frame answers (its camera or light revision) to now.
   const t = [state.sentAt.get('c' + header.camera_revision), state.sentAt.get('l' + header.light_revision),
@@ -289,7 +290,10 @@ function connect() {
 setInterval(() => send({ type: 'ping' }), 20000);
 setInterval(() => {
   const now = performance.now();
-  $('fps').textContent = (state.fpsFrames * 1000 / (now - state.fpsSince)).toFixed(1);
+  // The rate while frames come; a still view (no frame for 1.5 s) says so instead of "0.0 fps".
+  if (state.fpsFrames > 0)
+    $('fps').textContent = `${(state.fpsFrames * 1000 / (now - state.fpsSince)).toFixed(1)} fps`;
+  else if (!(now - state.lastFrameAt < 1500)) $('fps').textContent = 'still';
   state.fpsFrames = 0;
   state.fpsSince = now;
   const busy = state.waitingSince && now - state.waitingSince > BUSY_AFTER_MS;

@@ -138,6 +138,9 @@ test('first sight: a translucent jade bunny, steered without losing the view', {
     await page.mouse.up();
     await frameAfter(page, n);
     await page.waitForTimeout(2500);  // the still frame after the drag
+    // The overlay gives a rate while frames come and says "still" after, never "0.0 fps".
+    assert.match(await page.textContent('#fps'), /^(still|\d+\.\d fps)$/);
+    assert.notEqual(await page.textContent('#fps'), '0.0 fps');
     const cameraSent = sock.sent.filter((m) => m.type === 'camera').at(-1);
     assert.ok(cameraSent, 'the drag sent camera poses');
 
