@@ -64,3 +64,4 @@ $('frame').addEventListener('drop', (e) => {
   if (e.dataTransfer.files[0]) upload(e.dataTransfer.files[0]);
 });
 $('upload').addEventListener('change', (e) => { if (e.target.files[0]) upload(e.target.files[0]); });
+$('upload-grid').addEventListener('change', (e) => { if (e.target.files[0]) uploadGrid(e.target.files[0]); });

@@ -194,6 +194,32 @@ async function upload(file) {
   hello(false);
 }
 
+// A density grid file (nx ny nz float32 values, x fastest, the sides from #grid-dims): uploaded
+// (POST /api/assets?kind=grid) over the object's bounds, then the current medium's density.
+async function uploadGrid(file) {
+  const dims = $('grid-dims').value.split(',').map((v) => Number(v.trim()));
+  if (dims.length !== 3 || !dims.every((n) => Number.isInteger(n) && n >= 1 && n <= 512))
+    return showError(`grid dims: "${$('grid-dims').value}" must be three integers in [1, 512], nx,ny,nz`);
+  const expected = dims[0] * dims[1] * dims[2] * 4;
+  if (file.size !== expected)
+    return showError(`upload of ${file.name}: ${file.size} bytes, but ${dims.join(' x ')} float32 values are ${expected}`);
+  const b = state.scene && state.scene.bounds;
+  if (!b) return showError('upload of a grid: no scene is shown yet');
+  const bounds = [...b.min, ...b.max].join(',');
+  $('status').textContent = `uploading ${file.name}`;
+  const r = await api(`/api/assets?kind=grid&dims=${dims.join(',')}&bounds=${bounds}`,
+                      { method: 'POST', body: file, headers: { 'Content-Type': 'application/octet-stream' } });
+  if (r.status >= 400) return showError(`upload of ${file.name} failed: ${r.body.error}`);
+  const density = { type: 'grid', asset: r.body.id };
+  const json = structuredClone((state.source && state.source.json) || {});
+  json.medium = { ...(json.medium || {}), density };
+  if (state.source && state.source.inline) state.source = { inline: true, json };
+  else state.medium = json.medium;  // a shipped scene: the server swaps its medium
+  $('status').textContent = `uploaded ${file.name} (${dims.join(' x ')} grid)`;
+  canvas.dataset.uploadedGrid = r.body.id;
+  hello(true);
+}
+
 function download(blob, name) {
   const a = document.createElement('a');
   a.href = URL.createObjectURL(blob);

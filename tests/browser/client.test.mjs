@@ -3,7 +3,7 @@
 // frame is translucent (green from the jade medium, where the surface render of the same view is
 // grey); dragging keeps the canvas's size; a pipeline change keeps the view; light controls edit
 // the scene's lights and the light's marker follows shift-drag; a material change re-renders and
-// a bad one shows its error; the frame saves as PNG; an uploaded mesh is shown; a bake shows its
+// a bad one shows its error; the frame saves as PNG; an uploaded mesh and density grid are shown; a bake shows its
 // progress and a cancel button; the page works with --token. A still view of the sphere shows its
 // estimated error falling. Screenshots go to OUT_DIR. Run by CTest: node --test client.test.mjs.
 import { test } from 'node:test';
@@ -245,6 +245,34 @@ test('first sight: a translucent jade bunny, steered without losing the view', {
     await page.waitForFunction((r) => document.getElementById('view').dataset.request === String(r), uh.request, { timeout: 60000 });
     assert.ok(await frames(page) > u);
     await page.screenshot({ path: `${out}/browser-upload.png` });
+
+    // Upload a density grid (8^3 float32, denser towards +x) for the uploaded cube: the hello
+    // carries it as the medium's density and the view re-renders. A file of the wrong size is
+    // refused in the page, by name, before anything is sent.
+    const grid = `${out}/browser-grid.raw`;
+    const values = new Float32Array(512);
+    for (let i = 0; i < 512; ++i) values[i] = 0.1 + 0.3 * (i % 8);
+    writeFileSync(grid, Buffer.from(values.buffer));
+    writeFileSync(`${out}/browser-grid-short.raw`, Buffer.from(values.buffer, 0, 100));
+    // (psf, at draft: thickness takes only homogeneous media.)
+    await page.selectOption('#pipeline', 'psf');
+    await page.selectOption('#quality', 'draft');
+    await page.waitForFunction(() => document.getElementById('view').dataset.pipeline === 'psf', null, { timeout: 90000 });
+    await page.waitForTimeout(2500);
+    await page.fill('#grid-dims', '8,8,8');
+    await page.setInputFiles('#upload-grid', `${out}/browser-grid-short.raw`);
+    await page.waitForSelector('#error', { state: 'visible', timeout: 10000 });
+    assert.match(await page.textContent('#error'), /browser-grid-short\.raw: 100 bytes, but 8 x 8 x 8 float32 values are 2048/);
+    const ungridded = await checksum(page), g0 = await frames(page), hg = sock.sent.length;
+    await page.setInputFiles('#upload-grid', grid);
+    const gh = await sock.next(sock.sent, hg, (m) => m.type === 'hello');
+    const density = gh.scene && gh.scene.medium && gh.scene.medium.density;
+    assert.ok(density && density.type === 'grid' && density.asset, `the hello carries the grid: ${JSON.stringify(density)}`);
+    assert.equal(gh.keep_view, true);
+    await page.waitForFunction((r) => document.getElementById('view').dataset.request === String(r), gh.request, { timeout: 60000 });
+    await frameAfter(page, g0);
+    assert.notEqual(await checksum(page), ungridded, 'the grid changes the image');
+    await page.screenshot({ path: `${out}/browser-grid.png` });
 
     // Bake the single pipeline's samples at draft quality on the bunny: the bar climbs to 100 %,
     // with a cancel button while it runs.
