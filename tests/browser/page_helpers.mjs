@@ -4,10 +4,10 @@ import { spawn } from 'node:child_process';
 import { rmSync } from 'node:fs';
 import { chromium } from 'playwright-core';
 
-export function startDaemon(args = []) {
+// `tag` names the bake cache it starts empty (one per test file: the files run side by side).
+export function startDaemon(args = [], tag = 'client') {
   return new Promise((resolve, reject) => {
-    // One per test process: the browser tests run side by side.
-    const cache = `${process.env.OUT_DIR || '.'}/browser-bake-cache-${process.pid}`;
+    const cache = `${process.env.OUT_DIR || '.'}/browser-bake-cache-${tag}`;
     rmSync(cache, { recursive: true, force: true });
     const proc = spawn(process.env.SCATTERD, ['serve', '--port', '0', '--cache-dir', cache, ...args],
                        { stdio: ['ignore', 'pipe', 'pipe'] });

@@ -9,7 +9,7 @@ import { colourOf, frameAfter, frames, launch, recordSocket, startDaemon } from 
 // protocol, so the page's pointer handling is what a phone gives it). A mesh dropped on the view
 // is uploaded and shown. A long frame shows the busy line after 0.7 s; its cancel button stops it.
 test('touch and pinch, drag and drop, the busy line\'s cancel', { timeout: 200000 }, async () => {
-  const { proc, url } = await startDaemon(['--refine-max-passes', '0']);
+  const { proc, url } = await startDaemon(['--refine-max-passes', '0'], 'touch');
   const browser = await launch();
   const out = process.env.OUT_DIR || '.';
   mkdirSync(out, { recursive: true });
