@@ -38,19 +38,25 @@ TEST_F(SinglePipelineTest, ExactTransmittanceRemovesTheShError) {
   EXPECT_LT(diff / total, 0.25);  // measured 15 %: the SH error on this box
 }
 
+// small_box seen from `distance` up its z axis and lit straight down it by a directional light.
+Scene head_on_box(double distance, double fov_deg, double intensity) {
+  Scene s = small_box();
+  s.camera.position = {0, 0, distance};
+  s.camera.target = {0, 0, 0};
+  s.camera.fov_deg = fov_deg;
+  s.lights = {{Light::Type::Directional, {}, Vec3{0, 0, -1}, {1, 1, 1}, intensity}};
+  return s;
+}
+
 // tr_gradient: in a dense medium the transmittance falls by e within a fraction of a Gaussian,
 // so its value at the centre misjudges the Gaussian's share and the clip at the face cuts off
 // what it spread outwards. A dense box seen and lit head-on: taken at the centres, the image
 // is 0.74 of the reference's on the whole; moved and scaled by the optical depth's
 // gradient, 0.99.
 TEST_F(SinglePipelineTest, TransmittanceGradientKeepsADenseFaceItsLight) {
-  Scene s = small_box();
+  Scene s = head_on_box(5, 20, 3);
   s.medium.sigma_s = {10, 10, 10};
   s.medium.sigma_a = {0.2, 0.2, 0.2};
-  s.camera.position = {0, 0, 5};
-  s.camera.target = {0, 0, 0};
-  s.camera.fov_deg = 20;
-  s.lights = {{Light::Type::Directional, {}, Vec3{0, 0, -1}, {1, 1, 1}, 3}};
   Expected expected = reference_single(s);
   Settings on = {{"samples", 20000}, {"directions", 64}}, off = on;
   off["tr_gradient"] = 0;
@@ -68,11 +74,7 @@ TEST_F(SinglePipelineTest, TransmittanceGradientKeepsADenseFaceItsLight) {
 // (0, 0, -2 sigma_t), no curvature. So each inner Gaussian moves by 2 sigma_t s^2 along z, keeps
 // its sigma, and its factor grows by exp(2 sigma_t^2 s^2).
 TEST_F(SinglePipelineTest, TransmittanceGradientMatchesTheClosedForm) {
-  Scene s = small_box();
-  s.camera.position = {0, 0, 40};
-  s.camera.target = {0, 0, 0};
-  s.camera.fov_deg = 4;
-  s.lights = {{Light::Type::Directional, {}, Vec3{0, 0, -1}, {1, 1, 1}, 1}};
+  Scene s = head_on_box(40, 4, 1);
   const double st = (s.medium.sigma_s.x + s.medium.sigma_a.x + s.medium.sigma_s.y +
                      s.medium.sigma_a.y + s.medium.sigma_s.z + s.medium.sigma_a.z) /
                     3;
@@ -112,13 +114,9 @@ TEST_F(SinglePipelineTest, TransmittanceGradientMatchesTheClosedForm) {
 // denser: the depth, eye plus light, is 2 sigma_t (1 - z) (a_z, the sample's anchor), so samples
 // below z = 1 - 40 / (2 sigma_t) are zero and no move, those above keep their light.
 TEST_F(SinglePipelineTest, SamplesDeeperThanFortyOpticalDepthsAreSkipped) {
-  Scene s = small_box();
+  Scene s = head_on_box(40, 4, 1);
   s.medium.sigma_s = {30, 30, 30};
   s.medium.sigma_a = {0.5, 0.5, 0.5};
-  s.camera.position = {0, 0, 40};
-  s.camera.target = {0, 0, 0};
-  s.camera.fov_deg = 4;
-  s.lights = {{Light::Type::Directional, {}, Vec3{0, 0, -1}, {1, 1, 1}, 1}};
   const double st = 30.5, cut = 1 - 40 / (2 * st), margin = 0.15;  // 2.4 voxels
   pipeline().render(s, {Terms::Single, {{"samples", 20000}, {"directions", 64}}, nullptr});
   std::vector<float> shaded = pipeline().read_shaded();
