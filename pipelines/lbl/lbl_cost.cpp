@@ -27,12 +27,12 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
   //   Lattice is made; ClVolume (upload_volume) 40 B; Lattice (lattice.cpp): pt, ps, w 36 B
   //   (18 directions: and the diagonals' 36 B), src and irr 24 B, f_[2] 2 x 3 x directions
   //   floats, iface_ (blocked) 2 x 72 / block B; deposit 12 B and (g != 0) source 12 B, flow
-  //   24 B and (6 directions) the lattice's flux 12 B.
+  //   24 B and (flux_phase, 6 directions) the lattice's flux 12 B.
   // Measured RSS: 72^3 346 MB, 104^3 628 MB (estimates 370, 671 with ~220 MB of contexts).
   double host = kGridBytes + 44 + 72;
   double device = 40 + 36 * (d == 18 ? 2 : 1) + 24 + 2 * 12 * d +
                   (s.blocked ? 144.0 / s.block : 0) + 12 +
-                  (scene.medium.g != 0 ? 12 + 24 + (d == 6 ? 12 : 0) : 0);
+                  (scene.medium.g != 0 ? 12 + 24 + (d == 6 && s.flux_phase ? 12 : 0) : 0);
   l.host("scene.voxels", n * host,
          grid + " x " + short_number(host) + " B (grid, volume, coefficients)");
   l.device("scene.voxels", n * device,

@@ -81,7 +81,8 @@ struct State {
   cl::Buffer source;   // the lattice's source: the deposit, or with g != 0 the scaled beam's
   cl::Buffer flow;     // with g != 0: the deposit's direction summed over channels (3 per voxel,
                        // the view's phase), then the forward-scattered light's scattering (3)
-  cl::Buffer lattice_flux;    // with g != 0: the lattice's light direction m (3 per voxel)
+  cl::Buffer lattice_flux;    // flux_phase: the lattice's light direction m (3 per voxel), made
+                              // when first used
   bool flux_current = false;  // lattice_flux is the last diffusion's
   double max_sigma_s = 0;
   bool diffused = false;  // the lattice has converged for the loaded deposit and settings
@@ -274,10 +275,6 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     next->flow = scene.medium.g == 0 ? next->deposit
                                      : cl::Buffer(cl.context(), CL_MEM_READ_WRITE,
                                                   6 * next->volume.count() * sizeof(float));
-    next->lattice_flux =
-        scene.medium.g == 0 || s.directions != 6
-            ? next->deposit
-            : cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * next->volume.count() * sizeof(float));
     next->material = material_key(scene, s);
     next->density = scene.medium.density;
     state_ = std::move(next);
@@ -357,6 +354,9 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   const float w_single = d.single ? 1.f : 0.f, w_multiple = d.multiple && !d.tiny ? 1.f : 0.f;
   const bool flux_phase = uses_flux_phase(scene, s) && w_multiple != 0;
   if (flux_phase && !st.flux_current) {
+    if (!st.lattice_flux())
+      st.lattice_flux =
+          cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * st.volume.count() * sizeof(float));
     st.lattice->flux(st.lattice_flux);
     st.flux_current = true;
   }
@@ -364,9 +364,9 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   gpu::set_args(k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_t, v.n, v.grad, st.deposit,
                 st.lattice->irradiance_buffer(), w_single, w_multiple, st.flow,
                 float(scene.medium.g), scene.medium.g != 0 ? 1 : 0, v.sigma_s,
-                float(s.scaled_view ? scene.medium.g : 0.0), st.lattice_flux,
-                float(flux_phase ? scene.medium.g : 0.0), camera, w, h, d.bend ? 1 : 0,
-                float(s.step * st.volume.voxel), out);
+                float(s.scaled_view ? scene.medium.g : 0.0),
+                flux_phase ? st.lattice_flux : st.deposit, float(flux_phase ? scene.medium.g : 0.0),
+                camera, w, h, d.bend ? 1 : 0, float(s.step * st.volume.voxel), out);
   queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
   queue.finish();
   clock.stop("view");
