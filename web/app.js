@@ -95,8 +95,13 @@ function fillPipelines(choice) {
   }), choice);
 }
 
-// The quality, terms and bake controls follow the selected pipeline; the quality and terms
-// chosen before are kept where this pipeline has them too.
+// Whether the user has picked the terms themselves (else each pipeline shows its own default).
+let termsChosen = false;
+
+// The quality, terms and bake controls follow the selected pipeline; the quality chosen before,
+// and the terms if the user picked them, are kept where this pipeline has them too. Terms the
+// previous pipeline imposed (thickness renders only the single term) give way to this one's
+// default, so psf after thickness shows all terms, not psf's single term alone.
 function pipelineChanged() {
   const p = selected();
   if (!p) return;
@@ -104,7 +109,7 @@ function pipelineChanged() {
   const quality = $('quality').value || PREFERRED.quality, terms = $('terms').value || PREFERRED.terms;
   fillSelect($('quality'), p.qualities.map((q) => ({ value: q.name })),
              p.qualities.some((q) => q.name === quality) ? quality : 'normal');
-  fillSelect($('terms'), p.terms.map((t) => ({ value: t })), p.terms.includes(terms) ? terms : p.default_terms);
+  fillSelect($('terms'), p.terms.map((t) => ({ value: t })), termsChosen && p.terms.includes(terms) ? terms : p.default_terms);
   $('bake-box').hidden = !p.bakes;
   $('bake').disabled = !p.bakes || !!state.baking;
   compositeControl();
@@ -305,7 +310,7 @@ setInterval(() => {
 $('scene').addEventListener('change', () => { state.source = null; state.medium = null; fillPipelines($('pipeline').value); pipelineChanged(); hello(false); });
 $('pipeline').addEventListener('change', () => { pipelineChanged(); hello(true); });
 $('quality').addEventListener('change', () => hello(true));
-$('terms').addEventListener('change', () => { compositeControl(); hello(true); });
+$('terms').addEventListener('change', () => { termsChosen = true; compositeControl(); hello(true); });
 $('composite').addEventListener('change', () => hello(true));
 $('exposure').addEventListener('change', () => hello(true));
 $('bake').addEventListener('click', bake);

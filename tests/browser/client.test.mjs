@@ -193,6 +193,8 @@ test('first sight: a translucent jade bunny, steered without losing the view', {
     writeFileSync(`${out}/browser-grid-short.raw`, Buffer.from(values.buffer, 0, 100));
     // (psf, at draft: thickness takes only homogeneous media.)
     await page.selectOption('#pipeline', 'psf');
+    // The single term was thickness's only one, not the user's choice: psf shows its default.
+    assert.equal(await page.inputValue('#terms'), info('psf').default_terms);
     await page.selectOption('#quality', 'draft');
     await page.waitForFunction(() => document.getElementById('view').dataset.pipeline === 'psf', null, { timeout: 90000 });
     await page.waitForTimeout(2500);
