@@ -22,7 +22,7 @@ const state = {
 // The first screen: a translucent object at once, fast enough to drag: the jade bunny (a
 // homogeneous medium) by `thickness`, its single-scattering glow, at exposure 2^1.6 (the slider's
 // start; docs/WEB.md says why not psf or lbl).
-const PREFERRED = { scene: 'jade', pipeline: 'thickness', quality: 'normal', terms: 'single' };
+const PREFERRED = { scene: 'jade', pipeline: 'thickness', quality: 'normal' };
 // A still frame of the single term adds the multiple term from one of these (the first the
 // server has), at draft quality and half size: the first screen shows multiple scattering too,
 // while moving frames stay fast.
@@ -106,7 +106,7 @@ function pipelineChanged() {
   const p = selected();
   if (!p) return;
   $('pipeline').title = p.summary;
-  const quality = $('quality').value || PREFERRED.quality, terms = $('terms').value || PREFERRED.terms;
+  const quality = $('quality').value || PREFERRED.quality, terms = $('terms').value;
   fillSelect($('quality'), p.qualities.map((q) => ({ value: q.name })),
              p.qualities.some((q) => q.name === quality) ? quality : 'normal');
   fillSelect($('terms'), p.terms.map((t) => ({ value: t })), termsChosen && p.terms.includes(terms) ? terms : p.default_terms);
