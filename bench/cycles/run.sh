@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The reference against Blender's Cycles on the issue's sphere (bench/cycles/sphere.json; the
 # Blender scene is built by bench/cycles/scene.py), at g 0 and 0.7, for docs/BENCHMARKS.md:
-#  - the reference at SPP_REF samples per pixel (its mean and per-pixel standard error);
+#  - the reference at SPP_REF samples per pixel in stratified batches of BATCH (its mean and
+#    per-pixel standard error, from the batches' spread);
 #  - Cycles RUNS times at SPP_CYCLES with other seeds (their mean, and its standard error from
 #    their spread; the Z-test takes Student's t at Welch-Satterthwaite's degrees of freedom);
 #  - the two compared pixel by pixel (bench/cycles/compare.py: relative RMSE, a per-pixel Z-test
@@ -9,12 +10,15 @@
 #    (render time per sample x the samples that noise needs, noise falling as 1/sqrt(samples)).
 # Installs Blender (Debian's, 3.4), numpy and OpenImageIO's Python module on demand: they are
 # the benchmark's dependencies, not the project's. Usage: bench/cycles/run.sh [G...]
-# Environment: SPP_REF (1024), SPP_CYCLES (128), RUNS (8). Results: bench/out/cycles/.
+# Environment: SPP_REF (1024), BATCH (16), SPP_CYCLES (128), RUNS (8). Results: bench/out/cycles/.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 spp_ref=${SPP_REF:-1024}
 spp_cycles=${SPP_CYCLES:-128}
 runs=${RUNS:-8}
+# The reference's stratified batches (its setting `batch`): its standard error rests on
+# spp / batch independent batch means, the degrees of freedom the Z-test takes.
+batch=${BATCH:-16}
 out=bench/out/cycles
 mkdir -p "$out"
 py=/usr/bin/python3
@@ -38,6 +42,7 @@ for g in "${@:-0 0.7}"; do
     scene="$out/sphere-g$g1.json"
     sed "s/\"g\": 0.0/\"g\": $g1/" bench/cycles/sphere.json >"$scene"
     build/scatterd render "$scene" --pipeline reference --terms all --set spp="$spp_ref" seed=7 \
+      batch="$batch" \
       --out "$out/ref-g$g1.exr" --json >"$out/ref-g$g1.json"
     times=()
     files=()
@@ -51,7 +56,7 @@ for g in "${@:-0 0.7}"; do
     done
     combined=$($py bench/cycles/combine.py "$out/cycles-g$g1.exr" "${files[@]}")
     cmp=$($py bench/cycles/compare.py "$out/ref-g$g1.exr" "$out/cycles-g$g1.exr" \
-      --a-err "$out/ref-g$g1.stderr.exr" --b-err "$out/cycles-g$g1.stderr.exr" --a-n "$spp_ref" \
+      --a-err "$out/ref-g$g1.stderr.exr" --b-err "$out/cycles-g$g1.stderr.exr" --a-n "$((spp_ref / batch))" \
       --b-n "$runs")
     echo "$cmp" >"$out/compare-g$g1.json"
     $py - "$g1" "$spp_ref" "$spp_cycles" "$out/ref-g$g1.json" "$combined" "$cmp" "${times[@]}" <<'PY'

@@ -17,9 +17,9 @@ void basis(float3 n, float3* u, float3* v) {
   *v = cross(n, *u);
 }
 
-// A direction with cosine to `w` distributed as HG(g); stable for |g| -> 1 and g -> 0.
-float3 hg_sample(float3 w, float g, Rng* r) {
-  float u1 = rng_uniform(r), u2 = rng_uniform(r);
+// A direction with cosine to `w` distributed as HG(g), from two uniforms (u1 the cosine's, u2 the
+// azimuth's); stable for |g| -> 1 and g -> 0.
+float3 hg_sample_u(float3 w, float g, float u1, float u2) {
   float cos_t;
   if (fabs(g) < 1e-3f) {
     cos_t = 1.0f - 2.0f * u1;
@@ -33,4 +33,9 @@ float3 hg_sample(float3 w, float g, Rng* r) {
   float3 u, v;
   basis(w, &u, &v);
   return normalize(u * (sin_t * cos(phi)) + v * (sin_t * sin(phi)) + w * cos_t);
+}
+
+float3 hg_sample(float3 w, float g, Rng* r) {
+  float u1 = rng_uniform(r);
+  return hg_sample_u(w, g, u1, rng_uniform(r));
 }

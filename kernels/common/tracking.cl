@@ -79,10 +79,33 @@ bool spectral_collide(float m, float3 ss, float3 st, float3* w, Rng* r) {
   return false;
 }
 
+// An exponential sample of optical depth (mean 1) from a uniform in [0, 1).
+float exp_depth(float u) { return -log(1.0f - u); }
+
+// Delta tracking's next tentative collision after *t at rate m, before b: it falls where the
+// majorant's optical depth since the last one reaches *tau, an exponential sample. Past b the depth
+// left stays in *tau for the next stretch: a flight is memoryless, so carrying it on is delta
+// tracking too, and the flight's first sample (stratified, path.cl) then sets where its first
+// tentative collision falls across any number of bricks. A step below t's float32 resolution (a
+// dense brick far from the origin) ends the stretch with a fresh sample rather than looping.
+bool tentative_step(float* t, float m, float b, float* tau, Rng* r) {
+  float tn = *t + *tau / m;
+  if (tn >= b) {
+    *tau = fmax(*tau - m * (b - *t), 0.0f);
+    return false;
+  }
+  if (tn > *t || *tau <= 0.0f) {  // (a depth used up at the stretch's start: a collision there)
+    *t = tn;
+    return true;
+  }
+  *tau = exp_depth(rng_uniform(r));
+  return false;
+}
+
 // Tentative collisions at rate m over [a, b] in a stretch of constant coefficients ss, st.
 bool track_constant(float m, float3 ss, float3 st, float a, float b, float3* w, Rng* r,
-                    float* t_hit) {
-  for (float t = next_tentative(a, m, b, r); t < b; t = next_tentative(t, m, b, r))
+                    float* tau, float* t_hit) {
+  for (float t = a; tentative_step(&t, m, b, tau, r); *tau = exp_depth(rng_uniform(r)))
     if (spectral_collide(m, ss, st, w, r)) {
       *t_hit = t;
       return true;
@@ -91,11 +114,13 @@ bool track_constant(float m, float3 ss, float3 st, float a, float b, float3* w, 
 }
 
 // Spectral delta tracking: the first real collision along o + t d, t < tmax; *w takes the
-// collisions' weights (header). Empty bricks are stepped over; a uniform brick draws its
+// collisions' weights (header), *tau is the optical depth to the next tentative collision
+// (tentative_step: the caller draws it where a flight starts, and a flight that reaches tmax
+// leaves the rest in it to go on with). Empty bricks are stepped over; a uniform brick draws its
 // tentative collisions at its own largest sigma_t; within other bricks they are drawn at the
 // brick's majorant or (walk_voxels) at each voxel's largest sigma_t.
 bool delta_track(const Medium* md, float3 o, float3 d, float tmax, float3* w, Rng* r,
-                 float* t_hit) {
+                 float* tau, float* t_hit) {
   const Grid* g = &md->g;
   Dda s;
   if (!brick_walk(g, o, d, tmax, &s)) return false;
@@ -109,7 +134,7 @@ bool delta_track(const Medium* md, float3 o, float3 d, float tmax, float3* w, Rn
     if (u >= 0) {
       float3 st = vload3(u, md->sigma_t);
       float mu = max3(st);
-      if (mu > 0.0f && track_constant(mu, vload3(u, md->sigma_s), st, a, b, w, r, t_hit))
+      if (mu > 0.0f && track_constant(mu, vload3(u, md->sigma_s), st, a, b, w, r, tau, t_hit))
         return true;
       continue;
     }
@@ -122,12 +147,12 @@ bool delta_track(const Medium* md, float3 o, float3 d, float tmax, float3* w, Rn
         float3 st = voxel_sigma3(g, md->sigma_t, vc);
         float mv = max3(st);
         if (mv <= 0.0f) continue;
-        if (track_constant(mv, voxel_sigma3(g, md->sigma_s, vc), st, va, vb, w, r, t_hit))
+        if (track_constant(mv, voxel_sigma3(g, md->sigma_s, vc), st, va, vb, w, r, tau, t_hit))
           return true;
       }
       continue;
     }
-    for (float t = next_tentative(a, m, b, r); t < b; t = next_tentative(t, m, b, r)) {
+    for (float t = a; tentative_step(&t, m, b, tau, r); *tau = exp_depth(rng_uniform(r))) {
       int3 vc = voxel_of(g, o + d * t);
       if (spectral_collide(m, voxel_sigma3(g, md->sigma_s, vc), voxel_sigma3(g, md->sigma_t, vc),
                            w, r)) {

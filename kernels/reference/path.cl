@@ -9,9 +9,16 @@
 // dielectric boundary: paths reflect or refract at it with Fresnel's probabilities (total internal
 // reflection included) and shadow rays carry the Fresnel transmittance of their crossings.
 //
+// The samples of a pixel come in batches of `batch`: within a batch each flight's first
+// tentative collision and each scattering direction are stratified (padded Owen-scrambled Sobol,
+// kernels/common/rng.cl), the rest (null collisions, roulette, Fresnel) independent; batches are
+// independent of each other. batch 1: independent samples.
+//
 // terms: bit 0 adds light scattered once (NEE at the first vertex), bit 1 light scattered more
 // than once. Each launch adds `spp` samples per pixel to sum and sum_sq (three channels each),
-// from which the host takes the mean and its standard error. sum_sq holds the squares times
+// and each batch it completes to batch_sq (its sum's square; `part` holds the open batch's sum),
+// from which the host takes the mean and its standard error: stratified samples' own variance
+// overstates the mean's, the batches' spread does not. sum_sq and batch_sq hold the squares times
 // `sq_scale` (the inverse of the lights' largest power): a square in float32 overflows past
 // radiance 1.8e19 (a 1e12 light of colour 1e6) and underflows below 1e-19 (a 1e-12 light of
 // colour 1e-12), while radiance over power keeps to the geometry's range.
@@ -57,8 +64,9 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
                          __global const float* bvh_tris, int cells,
                          __global const int* cell_first, __global const int* cell_tris,
                          __global const uchar* cell_skip,
-                         float sq_scale, __global float* sum,
-                         __global float* sum_sq) {
+                         int batch, float sq_scale, __global float* sum,
+                         __global float* sum_sq, __global float* part,
+                         __global float* batch_sq) {
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
   Medium md = {make_grid(origin, voxel, nx, ny, nz, brick, bx, by, bz), sigma_s, sigma_t, majorant,
@@ -69,7 +77,9 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
              cell_tris, md.g, cell_skip};
   Cam cam = load_camera(camera);
   float3 d0 = camera_ray(cam, x, y, width, height, 0.5f, 0.5f);
-  float3 acc = (float3)(0.0f), acc2 = (float3)(0.0f);
+  size_t i = 3 * ((size_t)y * width + x);
+  float3 acc = (float3)(0.0f), acc2 = (float3)(0.0f), bacc2 = (float3)(0.0f);
+  float3 open_sum = vload3(0, part + i);  // the open batch's sum so far
   // Every sample's view ray is the pixel centre's: its first crossing and, index matched (the
   // ray goes on unchanged), the one after it are found once for all samples.
   float view_t[2] = {INFINITY, INFINITY};
@@ -84,6 +94,9 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
   for (int s = 0; s < spp; ++s) {
     int sample = first_sample + s;
     Rng r = rng_seed((uint)(y * width + x), (uint)sample, seed);
+    Sampler sp = sampler_start((uint)(y * width + x), (uint)(sample % batch),
+                               mix32(seed ^ mix32((uint)(sample / batch))));
+    float tau = exp_depth(sampler_1d(&sp));  // to the first tentative collision (delta_track)
     float3 o = cam.position, d = d0;
     float3 weight = (float3)(1.0f), value = (float3)(0.0f);
     int depth = 0;
@@ -96,7 +109,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
       // Within `safe` the flight needs no mesh. A free flight is memoryless: past it, it goes on
       // from there, again without the mesh as far as the distance field there allows.
       while (safe > 0.0f) {
-        collided = delta_track(&md, o, d, safe, &weight, &r, &t);
+        collided = delta_track(&md, o, d, safe, &weight, &r, &tau, &t);
         if (collided) break;
         o = o + d * safe;
         safe = interior_distance(g, interior, o);
@@ -118,7 +131,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
         if (use_mesh && !hit) break;  // a ray with no crossing ahead is outside the mesh
         // Inside iff the crossing ahead leaves the mesh.
         inside = !use_mesh || dot(d, n) > 0.0f;
-        collided = inside && delta_track(&md, o, d, t_surface, &weight, &r, &t);
+        collided = inside && delta_track(&md, o, d, t_surface, &weight, &r, &tau, &t);
       }
       safe = 0.0f;
       tmin = 0.0f;
@@ -132,7 +145,9 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
           value += weight * next_event(&md, lights, light_count, g_phase, o, d, bvh, ior,
                                        use_mesh, convex, safe, &r);
         if (!(terms & 2)) break;  // single scattering only: the path ends at its first vertex
-        d = hg_sample(d, g_phase, &r);
+        float2 u = sampler_2d(&sp);
+        d = hg_sample_u(d, g_phase, u.x, u.y);
+        tau = exp_depth(sampler_1d(&sp));
         float top = max3(weight);
         if (depth >= 3 && top < 0.25f) {  // Russian roulette on the largest channel's weight
           float q = fmax(top, 0.05f);
@@ -165,8 +180,14 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
     }
     acc += value;
     acc2 += (value * sq_scale) * value;
+    open_sum += value;
+    if ((sample + 1) % batch == 0) {
+      bacc2 += (open_sum * sq_scale) * open_sum;
+      open_sum = (float3)(0.0f);
+    }
   }
-  size_t i = 3 * ((size_t)y * width + x);
+  vstore3(open_sum, 0, part + i);
+  vstore3(vload3(0, batch_sq + i) + bacc2, 0, batch_sq + i);
   sum[i] += acc.x;
   sum[i + 1] += acc.y;
   sum[i + 2] += acc.z;

@@ -18,16 +18,16 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
   const std::string grid = g.text() + " voxels";
   // Peak while uploading (render: voxelize(), then upload_medium()); the grid lives to the end.
   add_medium_upload(upload, scene, g);
-  // Later, per frame: the grid and two medium buffers stay; Monte Carlo adds sum and sum_sq
-  // (device), zeros, host_sum, host_sq, the mean and the standard error (host); the marcher
-  // one output buffer and the image.
+  // Later, per frame: the grid and two medium buffers stay; Monte Carlo adds sum, sum_sq, part
+  // and batch_sq (device), zeros, their four host copies, the mean and the standard error
+  // (host); the marcher one output buffer and the image.
   const bool march = request.terms == Terms::Single && !s.mc;
   frame.host("scene.voxels", n * kGridBytes, grid + " x 29 B (grid)");
   frame.device("scene.voxels", n * 24, grid + " x 24 B (sigma_s, sigma_t)");
-  frame.host("scene.image.width", px * (march ? 12 : 72),
+  frame.host("scene.image.width", px * (march ? 12 : 96),
              std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px x " +
-                 (march ? "12" : "72") + " B");
-  frame.device("scene.image.width", px * (march ? 12 : 24), "the image's device buffers");
+                 (march ? "12" : "96") + " B");
+  frame.device("scene.image.width", px * (march ? 12 : 48), "the image's device buffers");
   if (scene.medium.ior != 1.0 || !s.voxel_boundary) {
     // FlatBvh (scene/bvh.hpp) on the host and its three buffers: ~2 nodes and 9 floats a triangle
     // (the mesh bounds the medium); the interior depth, a byte a voxel, and the convexity check's

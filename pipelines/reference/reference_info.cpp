@@ -24,7 +24,14 @@ const SettingsTable<ReferenceSettings>& reference_settings() {
                     setting("cells", &ReferenceSettings::cells, 0, 2, frame(),
                             "the path tracer's mesh queries (the same hits): 0 traverse the BVH, "
                             "1 walk per-voxel triangle lists with the voxel DDA, 2 the lists "
-                            "where they are short on a large mesh (uses_cell_lists)")});
+                            "where they are short on a large mesh (uses_cell_lists)"),
+                    setting("batch", &ReferenceSettings::batch, 0, 1 << 12, frame(),
+                            "the path tracer's samples per stratified batch: within a batch "
+                            "each flight's first collision and each scattering direction are "
+                            "stratified (padded Owen-scrambled Sobol), batches are independent "
+                            "and the standard error comes from their spread; 1: independent "
+                            "samples; 0: the largest power of two up to 16 that leaves 32 "
+                            "batches")});
   return table;
 }
 

@@ -28,16 +28,36 @@ bool marches(const ReferenceSettings& s, Terms terms) {
   return terms == Terms::Single && !s.mc;
 }
 
-// Mean and standard error of the mean from per-sample sums (every sample carries the three
-// channels). sum_sq holds the squares times sq_scale.
-void finish_estimate(const std::vector<float>& sum, const std::vector<float>& sum_sq, int spp,
-                     double sq_scale, Image& mean, Image& std_error) {
-  for (size_t i = 0; i < sum.size(); ++i) {
-    double n = spp;
-    double m = sum[i] / n;
-    double var = std::max(0.0, sum_sq[i] / sq_scale / n - m * m) * n / std::max(1.0, n - 1);
+// The batches a standard error is taken from at the least; with fewer, the samples' own variance
+// (which overstates a stratified mean's error: a conservative estimate).
+constexpr int kMinBatches = 4;
+
+// The kernel's sums (kernels/reference/path.cl), every sample carrying the three channels:
+// sum_sq and batch_sq hold squares times sq_scale; part is the open batch's sum.
+struct Sums {
+  std::vector<float> sum, sum_sq, part, batch_sq;
+};
+
+// Mean and standard error of the mean of `spp` samples in batches of `batch`. With k >= 4
+// complete batches of sums S_j, var(S) is their sample variance and the mean's variance
+// var(S) / (batch spp): the batches are independent, the samples within one are not.
+void finish_estimate(const Sums& s, int spp, int batch, double sq_scale, Image& mean,
+                     Image& std_error) {
+  const double n = spp;
+  const int k = spp / batch;
+  for (size_t i = 0; i < s.sum.size(); ++i) {
+    double m = s.sum[i] / n;
+    double var_mean;
+    if (batch > 1 && k >= kMinBatches) {
+      double total = s.sum[i] - s.part[i], mb = total / k;  // the complete batches' mean sum
+      double var_s = std::max(0.0, s.batch_sq[i] / sq_scale / k - mb * mb) * k / (k - 1.0);
+      var_mean = var_s / (double(batch) * n);
+    } else {
+      double var = std::max(0.0, s.sum_sq[i] / sq_scale / n - m * m) * n / std::max(1.0, n - 1);
+      var_mean = var / n;
+    }
     mean.rgb[i] = static_cast<float>(m);
-    std_error.rgb[i] = static_cast<float>(std::sqrt(var / n));
+    std_error.rgb[i] = static_cast<float>(std::sqrt(var_mean));
   }
 }
 
@@ -61,6 +81,12 @@ cl::Buffer upload_ints(gpu::ClContext& cl, const std::vector<int32_t>& v) {
 }
 
 }  // namespace
+
+int batch_for(int spp) {
+  int b = 1;
+  while (b < 16 && 2 * b * 32 <= spp) b *= 2;
+  return b;
+}
 
 Plan ReferencePipeline::plan(const Scene& scene, const RenderRequest& request) {
   require_terms(*this, request.terms);
@@ -195,6 +221,10 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                  zeros.data());
   cl::Buffer sum_sq(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float),
                     zeros.data());
+  cl::Buffer part(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, floats * sizeof(float),
+                  zeros.data());
+  cl::Buffer batch_sq(cl.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
+                      floats * sizeof(float), zeros.data());
   cl::Kernel k(cl.program(program("kernels/reference/path.cl")), "path_trace");
   int terms = request.terms == Terms::Single ? 1 : (request.terms == Terms::Multiple ? 2 : 3);
   // Progressive passes of a few samples keep each launch short and let callers see progress.
@@ -204,12 +234,16 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   const int per_pass = std::min(s.spp, 4);
   const int cap = request.max_error ? std::min(8 * s.spp, 1 << 20) : s.spp;
   const double sq_scale = square_scale(scene);
-  std::vector<float> host_sum(floats), host_sq(floats);
+  const int batch = s.batch > 0 ? s.batch : batch_for(s.spp);
+  Sums host{std::vector<float>(floats), std::vector<float>(floats), std::vector<float>(floats),
+            std::vector<float>(floats)};
   result.std_error = Image(w, h);
   auto noise_now = [&](int spp) {
-    queue.enqueueReadBuffer(sum, CL_TRUE, 0, floats * sizeof(float), host_sum.data());
-    queue.enqueueReadBuffer(sum_sq, CL_TRUE, 0, floats * sizeof(float), host_sq.data());
-    finish_estimate(host_sum, host_sq, spp, sq_scale, result.image, *result.std_error);
+    queue.enqueueReadBuffer(sum, CL_TRUE, 0, floats * sizeof(float), host.sum.data());
+    queue.enqueueReadBuffer(sum_sq, CL_TRUE, 0, floats * sizeof(float), host.sum_sq.data());
+    queue.enqueueReadBuffer(part, CL_TRUE, 0, floats * sizeof(float), host.part.data());
+    queue.enqueueReadBuffer(batch_sq, CL_TRUE, 0, floats * sizeof(float), host.batch_sq.data());
+    finish_estimate(host, spp, batch, sq_scale, result.image, *result.std_error);
     return relative_norm(*result.std_error, result.image);
   };
   int spp = 0, next_check = 12;
@@ -221,8 +255,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                   medium.sigma_s, medium.sigma_t, medium.majorant, uniform_buf, lights, light_count,
                   g, camera, w, h, terms, n, done, s.seed, s.max_depth, ior,
                   int(mesh_bounds || dielectric), convex, interior_buf, bvh_bounds, bvh_links,
-                  bvh_tris, int(!cells.triangles.empty()), cell_first, cell_tris, cell_skip,
-                  float(sq_scale), sum, sum_sq);
+                  bvh_tris, int(!cells.triangles.empty()), cell_first, cell_tris, cell_skip, batch,
+                  float(sq_scale), sum, sum_sq, part, batch_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     spp = done + n;

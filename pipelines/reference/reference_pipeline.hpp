@@ -26,8 +26,14 @@ struct ReferenceSettings {
   bool mc = false;
   bool voxel_boundary = false;
   int cells = 2;  // the mesh queries: 0 the BVH, 1 the voxels' lists, 2 whichever suits the mesh
+  int batch = 0;  // samples per stratified batch (kernels/reference/path.cl); 0: batch_for(spp)
   static ReferenceSettings read(const Settings& settings);
 };
+
+// The samples per stratified batch when `batch` is 0: the largest power of two up to 16 that
+// leaves at least 32 batches in `spp` samples (1 below 64), so that each pixel's standard error
+// rests on 31 or more degrees of freedom.
+int batch_for(int spp);
 
 class ReferencePipeline : public Pipeline {
  public:
