@@ -62,20 +62,6 @@ struct Builder {
   }
 };
 
-double triangle_hit(const float* t, const Vec3& o, const Vec3& d) {
-  Vec3 v0{t[0], t[1], t[2]}, v1{t[4], t[5], t[6]}, v2{t[8], t[9], t[10]};
-  Vec3 e1 = v1 - v0, e2 = v2 - v0, p = cross(d, e2);
-  double det = dot(e1, p);
-  if (std::abs(det) < 1e-20) return -1;
-  Vec3 s = o - v0;
-  double u = dot(s, p) / det;
-  if (u < 0 || u > 1) return -1;
-  Vec3 q = cross(s, e1);
-  double v = dot(d, q) / det;
-  if (v < 0 || u + v > 1) return -1;
-  return dot(e2, q) / det;
-}
-
 bool box_hit(const float* b, const Vec3& o, const Vec3& d, double t_min, double t_max) {
   for (int a = 0; a < 3; ++a) {
     double inv = 1.0 / d[a];
@@ -88,6 +74,20 @@ bool box_hit(const float* b, const Vec3& o, const Vec3& d, double t_min, double 
 }
 
 }  // namespace
+
+double triangle_ray_hit(const float* t, const Vec3& o, const Vec3& d) {
+  Vec3 v0{t[0], t[1], t[2]}, v1{t[4], t[5], t[6]}, v2{t[8], t[9], t[10]};
+  Vec3 e1 = v1 - v0, e2 = v2 - v0, p = cross(d, e2);
+  double det = dot(e1, p);
+  if (std::abs(det) < 1e-20) return -1;
+  Vec3 s = o - v0;
+  double u = dot(s, p) / det;
+  if (u < 0 || u > 1) return -1;
+  Vec3 q = cross(s, e1);
+  double v = dot(d, q) / det;
+  if (v < 0 || u + v > 1) return -1;
+  return dot(e2, q) / det;
+}
 
 FlatBvh build_bvh(const Mesh& mesh) {
   Builder b{mesh, {}, {}, {}};
@@ -117,7 +117,7 @@ double bvh_closest_hit(const FlatBvh& bvh, const Vec3& o, const Vec3& d, double 
     int32_t a = bvh.links[2 * node], count = bvh.links[2 * node + 1];
     if (count > 0) {
       for (int32_t i = 0; i < count; ++i) {
-        double t = triangle_hit(&bvh.triangles[12 * (a + i)], o, d);
+        double t = triangle_ray_hit(&bvh.triangles[12 * (a + i)], o, d);
         if (t > t_min && t < best) {
           best = t;
           found = true;

@@ -22,6 +22,10 @@ struct FlatBvh {
 
 FlatBvh build_bvh(const Mesh& mesh);
 
+// Moller-Trumbore: where o + t d meets triangle `tri` (12 floats of FlatBvh::triangles), or a
+// negative value when it misses (as the kernels' triangle_hit).
+double triangle_ray_hit(const float* tri, const Vec3& o, const Vec3& d);
+
 // Closest hit of o + t d, t in (t_min, t_max), for testing the flattened layout on the CPU;
 // returns the distance or a negative value. The kernels implement the same traversal.
 double bvh_closest_hit(const FlatBvh& bvh, const Vec3& o, const Vec3& d, double t_min,

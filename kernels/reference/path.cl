@@ -28,18 +28,54 @@ float3 light_irradiance3(Light L, float3 x, float3* wl, float* dist) {
                   light_irradiance(L, x, 2, wl, dist));
 }
 
+// The exit maps of the directional lights (pipelines/reference/exit_maps.hpp): per light a
+// header, the cells' list starts and the lists.
+typedef struct {
+  __global const float* header;
+  __global const int* first;
+  __global const int* tris;
+} ExitMaps;
+
+// The exit of x + t wl from inside a convex mesh through light l's map: the closest hit ahead
+// among the triangles of x's cell; false when the light has no map or the cell holds no hit.
+bool exit_map_hit(ExitMaps maps, Bvh bvh, int l, float3 x, float3 wl, float* t, float3* n) {
+  __global const float* h = maps.header + 12 * l;
+  int nu = (int)h[9], nv = (int)h[10];
+  if (nu == 0) return false;
+  int i = (int)floor((dot(x, vload3(0, h)) - h[6]) * h[8]);
+  int j = (int)floor((dot(x, vload3(1, h)) - h[7]) * h[8]);
+  if (i < 0 || j < 0 || i >= nu || j >= nv) return false;
+  int c = (int)h[11] + j * nu + i;
+  float best = INFINITY;
+  bool found = false;
+  for (int k = maps.first[c], end = maps.first[c + 1]; k < end; ++k)
+    found |= triangle_hit(bvh.tris + 12 * maps.tris[k], x, wl, 0.0f, &best, n);
+  *t = best;
+  return found;
+}
+
 // Light arriving at x and scattered into -d, per channel: sum over the lights.
 float3 next_event(const Medium* md, __global const float* lights, int light_count, float g_phase,
-                  float3 x, float3 d, Bvh bvh, float ior, bool use_mesh, bool convex,
-                  float interior, Rng* r) {
+                  float3 x, float3 d, Bvh bvh, ExitMaps maps, float ior, bool use_mesh,
+                  bool convex, float interior, Rng* r) {
   float3 sum = (float3)(0.0f);
   for (int l = 0; l < light_count; ++l) {
     float3 wl;
     float dist;
     float3 e = light_irradiance3(load_light(lights, l), x, &wl, &dist);
     if (max3(e) <= 0.0f) continue;
+    float t_exit;
+    float3 n;
     if (!use_mesh) {
       e *= exact_transmittance(md, x, wl, dist);
+    } else if (convex && maps.tris && exit_map_hit(maps, bvh, l, x, wl, &t_exit, &n)) {
+      // The only crossing (convex), found in the light's map: the medium up to it, and with a
+      // dielectric its Fresnel transmittance (leaving: dot(wl, n) > 0).
+      e *= exact_transmittance(md, x, wl, t_exit);
+      if (ior != 1.0f) {
+        float cos_t;
+        e *= 1.0f - fresnel(fabs(dot(wl, n)), ior, &cos_t);
+      }
     } else {
       // Within `interior` of x there is no boundary: track that far without the mesh.
       float s = fmin(interior, dist);
@@ -63,8 +99,9 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
                          __global const float* bvh_bounds, __global const int* bvh_links,
                          __global const float* bvh_tris, int cells,
                          __global const int* cell_first, __global const int* cell_tris,
-                         __global const uchar* cell_skip,
-                         int batch, float sq_scale, __global float* sum,
+                         __global const uchar* cell_skip, int exit_maps,
+                         __global const float* exit_header, __global const int* exit_first,
+                         __global const int* exit_tris, int batch, float sq_scale, __global float* sum,
                          __global float* sum_sq, __global float* part,
                          __global float* batch_sq) {
   int x = get_global_id(0), y = get_global_id(1);
@@ -75,6 +112,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
   // cells: the mesh queries walk the voxels' triangle lists instead of the BVH (boundary.cl).
   Bvh bvh = {bvh_bounds, bvh_links, bvh_tris, 1e-3f * voxel, cells ? cell_first : 0,
              cell_tris, md.g, cell_skip};
+  ExitMaps maps = {exit_header, exit_first, exit_maps ? exit_tris : 0};
   Cam cam = load_camera(camera);
   float3 d0 = camera_ray(cam, x, y, width, height, 0.5f, 0.5f);
   size_t i = 3 * ((size_t)y * width + x);
@@ -142,7 +180,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
         if (use_mesh) safe = interior_distance(g, interior, o);
         if (max3(weight) <= 0.0f || ++depth > max_depth) break;
         if ((depth == 1 && (terms & 1)) || (depth > 1 && (terms & 2)))
-          value += weight * next_event(&md, lights, light_count, g_phase, o, d, bvh, ior,
+          value += weight * next_event(&md, lights, light_count, g_phase, o, d, bvh, maps, ior,
                                        use_mesh, convex, safe, &r);
         if (!(terms & 2)) break;  // single scattering only: the path ends at its first vertex
         float2 u = sampler_2d(&sp);

@@ -25,6 +25,11 @@ const SettingsTable<ReferenceSettings>& reference_settings() {
                             "the path tracer's mesh queries (the same hits): 0 traverse the BVH, "
                             "1 walk per-voxel triangle lists with the voxel DDA, 2 the lists "
                             "where they are short on a large mesh (uses_cell_lists)"),
+                    flag("exit_maps", &ReferenceSettings::exit_maps, frame(),
+                         "1: on a convex mesh, shadow rays towards a directional light find "
+                         "their exit among the triangles of one cell of a map of the mesh's "
+                         "light-facing triangles over the plane normal to the light (the same "
+                         "hits); 0: by the mesh queries `cells` chooses"),
                     setting("batch", &ReferenceSettings::batch, 0, 1 << 12, frame(),
                             "the path tracer's samples per stratified batch: within a batch "
                             "each flight's first collision and each scattering direction are "

@@ -10,6 +10,7 @@
 #include "pipelines/metrics.hpp"
 #include "pipelines/reference/cell_triangles.hpp"
 #include "pipelines/reference/convex.hpp"
+#include "pipelines/reference/exit_maps.hpp"
 #include "pipelines/reference/inside_grid.hpp"
 #include "scene/bvh.hpp"
 
@@ -182,6 +183,16 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   cl::Buffer interior_buf(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, interior.size(),
                           interior.data());
   const int convex = (mesh_bounds || dielectric) && is_convex(*scene.mesh);
+  ExitMaps exits;
+  if (convex && s.exit_maps && !marches(s, request.terms)) exits = exit_maps(bvh, scene.lights);
+  if (exits.header.empty()) exits.header.assign(kExitMapFloats, 0.f);
+  cl::Buffer exit_header = upload(cl, exits.header);
+  cl::Buffer exit_first = upload_ints(cl, exits.first);
+  cl::Buffer exit_tris = upload_ints(cl, exits.triangles);
+  if (!exits.empty())
+    plan_stage(result.plan, "boundary").reason +=
+        "; the mesh is convex: shadow rays towards the directional lights find their exit in maps "
+        "of the light-facing triangles (exit_maps)";
   ClMedium medium = upload_medium(cl, grid);
   // Bricks of one coefficient need no voxel walk (pipelines/reference/inside_grid.hpp).
   std::vector<int32_t> uniform = uniform_bricks(grid, medium.bricks.brick, mesh_bounds);
@@ -255,8 +266,9 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                   medium.sigma_s, medium.sigma_t, medium.majorant, uniform_buf, lights, light_count,
                   g, camera, w, h, terms, n, done, s.seed, s.max_depth, ior,
                   int(mesh_bounds || dielectric), convex, interior_buf, bvh_bounds, bvh_links,
-                  bvh_tris, int(!cells.triangles.empty()), cell_first, cell_tris, cell_skip, batch,
-                  float(sq_scale), sum, sum_sq, part, batch_sq);
+                  bvh_tris, int(!cells.triangles.empty()), cell_first, cell_tris, cell_skip,
+                  int(!exits.empty()), exit_header, exit_first, exit_tris, batch, float(sq_scale),
+                  sum, sum_sq, part, batch_sq);
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     spp = done + n;

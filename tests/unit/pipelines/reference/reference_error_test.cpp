@@ -6,10 +6,10 @@
 #include <cmath>
 
 #include "../../test_util.hpp"
-#include "reference_render.hpp"
 #include "pipelines/accumulate.hpp"
 #include "pipelines/metrics.hpp"
 #include "pipelines/reference/reference_pipeline.hpp"
+#include "reference_render.hpp"
 
 namespace scatter {
 namespace {
@@ -37,8 +37,8 @@ TEST(ReferencePipeline, TheEstimatedErrorIsTheStandardErrorsNormAndPredictsTheEr
   RenderResult whole = reference_render(s, Terms::Multiple, {{"spp", 96}, {"seed", 9}});
   double combined = relative_norm(passes.std_error(), passes.mean());
   EXPECT_NEAR(combined, *whole.error_estimate, 0.15 * *whole.error_estimate);
-  EXPECT_NEAR(combined, *a.error_estimate / 2, 0.2 * combined);  // 4x the samples
-  EXPECT_FALSE(reference_render(s, Terms::Single).error_estimate);         // the marcher: exact
+  EXPECT_NEAR(combined, *a.error_estimate / 2, 0.2 * combined);     // 4x the samples
+  EXPECT_FALSE(reference_render(s, Terms::Single).error_estimate);  // the marcher: exact
 }
 
 TEST(ReferencePipeline, BatchesLeaveThirtyTwoOfUpToSixteenSamples) {
@@ -62,7 +62,8 @@ TEST(ReferencePipeline, StratifiedBatchesLowerTheNoiseAndTheirEstimatePredictsIt
   s.medium.sigma_a = {0.05, 0.05, 0.05};
   RenderResult a = reference_render(s, Terms::All, {{"spp", 256}, {"seed", 1}});
   RenderResult b = reference_render(s, Terms::All, {{"spp", 256}, {"seed", 2}});
-  RenderResult independent = reference_render(s, Terms::All, {{"spp", 256}, {"seed", 3}, {"batch", 1}});
+  RenderResult independent =
+      reference_render(s, Terms::All, {{"spp", 256}, {"seed", 3}, {"batch", 1}});
   std::vector<uint8_t> all(size_t(s.width) * s.height, 1);
   const double ea = *a.error_estimate, ei = *independent.error_estimate;
   EXPECT_LT(ea, 0.9 * ei);

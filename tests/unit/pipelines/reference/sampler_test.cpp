@@ -53,7 +53,9 @@ uint32_t mix32(uint32_t x) {
   return x;
 }
 
-float unit_fraction(uint32_t x) { return float(x >> 8) * (1.0f / 16777216.0f); }
+float unit_fraction(uint32_t x) {
+  return float(x >> 8) * (1.0f / 16777216.0f);
+}
 
 // A sample's first draws: a 1D, then a 2D (kernels/reference/sampler_draws.cl).
 std::array<float, 3> cpu_draws(uint32_t pixel, uint32_t index, uint32_t batch_seed) {
