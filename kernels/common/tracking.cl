@@ -15,14 +15,18 @@
 // ---- Tracking in the voxel medium with per-brick majorants -----------------------------------
 
 // The voxel medium as the trackers read it: the grid, the voxels' coefficients (RGB interleaved),
-// per brick the majorant and the index of a voxel whose coefficients the whole brick shares (-1
-// when they differ: pipelines/reference/inside_grid.hpp, uniform_bricks).
+// per brick the majorant and the index of a voxel whose coefficients the whole brick shares (< 0
+// when they differ or no segment reaches it: pipelines/reference/inside_grid.hpp,
+// uniform_bricks), and the index of a voxel whose coefficients every segment the trackers are
+// given sees (homogeneous_voxel: a constant density inside the mesh that bounds the medium), or
+// -1. Then tracking and optical depth take no walk.
 typedef struct {
   Grid g;
   __global const float* sigma_s;
   __global const float* sigma_t;
   __global const float* majorant;
   __global const int* uniform;
+  int homogeneous;
 } Medium;
 
 float3 voxel_sigma3(const Grid* g, __global const float* sigma, int3 c) {
@@ -121,6 +125,13 @@ bool track_constant(float m, float3 ss, float3 st, float a, float b, float3* w, 
 // brick's majorant or (walk_voxels) at each voxel's largest sigma_t.
 bool delta_track(const Medium* md, float3 o, float3 d, float tmax, float3* w, Rng* r,
                  float* tau, float* t_hit) {
+  if (md->homogeneous >= 0) {
+    float3 st = vload3(md->homogeneous, md->sigma_t);
+    float m = max3(st);
+    return m > 0.0f &&
+           track_constant(m, vload3(md->homogeneous, md->sigma_s), st, 0.0f, tmax, w, r, tau,
+                          t_hit);
+  }
   const Grid* g = &md->g;
   Dda s;
   if (!brick_walk(g, o, d, tmax, &s)) return false;
@@ -183,6 +194,7 @@ float3 brick_depth(const Medium* md, int bi, float3 o, float3 d, float a, float 
 // bricks that hold any medium. No randomness: a shadow ray's transmittance without the variance
 // of ratio tracking, whose estimate where the majorant is tight (a homogeneous medium) is 0 or 1.
 float3 exact_transmittance(const Medium* md, float3 o, float3 d, float tmax) {
+  if (md->homogeneous >= 0) return exp(-vload3(md->homogeneous, md->sigma_t) * tmax);
   const Grid* g = &md->g;
   Dda s;
   if (!brick_walk(g, o, d, tmax, &s)) return (float3)(1.0f);

@@ -36,8 +36,9 @@ typedef struct {
   __global const int* tris;
 } ExitMaps;
 
-// The exit of x + t wl from inside a convex mesh through light l's map: the closest hit ahead
-// among the triangles of x's cell; false when the light has no map or the cell holds no hit.
+// The exit of x + t wl from inside a convex mesh through light l's map: the first hit ahead
+// among the triangles of x's cell (the only one: a convex mesh is left once); false when the
+// light has no map or the cell holds no hit.
 bool exit_map_hit(ExitMaps maps, Bvh bvh, int l, float3 x, float3 wl, float* t, float3* n) {
   __global const float* h = maps.header + 12 * l;
   int nu = (int)h[9], nv = (int)h[10];
@@ -48,8 +49,8 @@ bool exit_map_hit(ExitMaps maps, Bvh bvh, int l, float3 x, float3 wl, float* t, 
   int c = (int)h[11] + j * nu + i;
   float best = INFINITY;
   bool found = false;
-  for (int k = maps.first[c], end = maps.first[c + 1]; k < end; ++k)
-    found |= triangle_hit(bvh.tris + 12 * maps.tris[k], x, wl, 0.0f, &best, n);
+  for (int k = maps.first[c], end = maps.first[c + 1]; k < end && !found; ++k)
+    found = triangle_hit(bvh.tris + 12 * maps.tris[k], x, wl, 0.0f, &best, n);
   *t = best;
   return found;
 }
@@ -92,7 +93,8 @@ float3 next_event(const Medium* md, __global const float* lights, int light_coun
 __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int brick, int bx,
                          int by, int bz, __global const float* sigma_s,
                          __global const float* sigma_t, __global const float* majorant,
-                         __global const int* uniform, __global const float* lights, int light_count, float g_phase,
+                         __global const int* uniform, int homogeneous,
+                         __global const float* lights, int light_count, float g_phase,
                          __global const float* camera, int width, int height, int terms,
                          int spp, int first_sample, uint seed, int max_depth, float ior,
                          int use_mesh, int convex, __global const uchar* interior,
@@ -107,7 +109,7 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
   Medium md = {make_grid(origin, voxel, nx, ny, nz, brick, bx, by, bz), sigma_s, sigma_t, majorant,
-               uniform};
+               uniform, homogeneous};
   const Grid* g = &md.g;
   // cells: the mesh queries walk the voxels' triangle lists instead of the BVH (boundary.cl).
   Bvh bvh = {bvh_bounds, bvh_links, bvh_tris, 1e-3f * voxel, cells ? cell_first : 0,

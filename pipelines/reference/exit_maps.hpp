@@ -28,12 +28,12 @@ struct ExitMaps {
 inline constexpr int kExitMapFloats = 12;
 
 // The maps for `lights` over the triangles of `bvh` (the scene's mesh, which must be convex:
-// convex.hpp). About one cell per light-facing triangle, at most 1024 x 1024 a light.
+// convex.hpp). About four cells per light-facing triangle, at most 1024 x 1024 a light.
 ExitMaps exit_maps(const FlatBvh& bvh, const std::vector<Light>& lights);
 
 // The exit of o + t d (d the light's direction towards it) found as the kernel finds it: the
-// closest hit, t > 0, among the triangles of o's cell; a negative value when there is none. For
-// tests on the CPU.
+// first hit, t > 0, among the triangles of o's cell (from inside a convex mesh, the only one); a
+// negative value when there is none. For tests on the CPU.
 double exit_map_hit(const ExitMaps& maps, const FlatBvh& bvh, int light, const Vec3& o);
 
 }  // namespace scatter

@@ -122,7 +122,7 @@ std::vector<int32_t> uniform_bricks(const VoxelGrid& grid, int brick, bool mesh_
   for (int b = 0; b < int(out.size()); ++b) {
     const int i0 = (b % bx) * brick, j0 = (b / bx % by) * brick, k0 = b / (bx * by) * brick;
     int64_t rep = -1;
-    bool same = true;
+    bool same = true;  // (and rep stays -1 where no voxel is reachable)
     for (int k = k0; same && k < std::min(k0 + brick, grid.nz); ++k)
       for (int j = j0; same && j < std::min(j0 + brick, grid.ny); ++j)
         for (int i = i0; same && i < std::min(i0 + brick, grid.nx); ++i) {
@@ -136,9 +136,26 @@ std::vector<int32_t> uniform_bricks(const VoxelGrid& grid, int brick, bool mesh_
             same = close(grid.sigma_s[3 * v + c], grid.sigma_s[3 * rep + c]) &&
                    close(grid.sigma_a[3 * v + c], grid.sigma_a[3 * rep + c]);
         }
-    if (same && rep >= 0) out[size_t(b)] = int32_t(rep);
+    if (same) out[size_t(b)] = rep >= 0 ? int32_t(rep) : -2;
   }
   return out;
+}
+
+int32_t homogeneous_voxel(const VoxelGrid& grid, const std::vector<int32_t>& uniform) {
+  int32_t rep = -1;
+  for (int32_t u : uniform) {
+    if (u == -2) continue;
+    if (u < 0) return -1;
+    if (rep < 0) {
+      rep = u;
+      continue;
+    }
+    for (int c = 0; c < 3; ++c)
+      if (!close(grid.sigma_s[3 * size_t(u) + c], grid.sigma_s[3 * size_t(rep) + c]) ||
+          !close(grid.sigma_a[3 * size_t(u) + c], grid.sigma_a[3 * size_t(rep) + c]))
+        return -1;
+  }
+  return rep;
 }
 
 }  // namespace scatter

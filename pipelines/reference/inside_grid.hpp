@@ -41,9 +41,14 @@ namespace scatter {
 // Per brick of `brick`^3 voxels (x fastest), the index of a voxel whose sigma_s and sigma_a (to
 // float32 rounding, 1e-6 relative) every voxel of the brick that a segment may cross shares, or
 // -1: then tracking and transmittance in the brick need no voxel walk (its optical depth is
-// sigma_t times the length). With
+// sigma_t times the length); -2 where no segment may cross any of its voxels. With
 // `mesh_bounds` only voxels inside the mesh or next to it count (those restrict_to_mesh gave
 // values), since the medium's segments lie inside the mesh; otherwise every voxel does.
 std::vector<int32_t> uniform_bricks(const VoxelGrid& grid, int brick, bool mesh_bounds);
+
+// From uniform_bricks' answer: the index of a voxel whose coefficients every voxel a segment may
+// cross shares (a constant density inside the mesh: then a segment's tracking and optical depth
+// need no walk at all), or -1.
+int32_t homogeneous_voxel(const VoxelGrid& grid, const std::vector<int32_t>& uniform);
 
 }  // namespace scatter

@@ -30,6 +30,11 @@ const SettingsTable<ReferenceSettings>& reference_settings() {
                          "their exit among the triangles of one cell of a map of the mesh's "
                          "light-facing triangles over the plane normal to the light (the same "
                          "hits); 0: by the mesh queries `cells` chooses"),
+                    flag("homogeneous", &ReferenceSettings::homogeneous, frame(),
+                         "1: where the mesh bounds a medium of one coefficient (a constant "
+                         "density), the path tracer's flights and optical depths are taken "
+                         "without walking the bricks (the same values); 0: walked as any "
+                         "medium's"),
                     setting("batch", &ReferenceSettings::batch, 0, 1 << 12, frame(),
                             "the path tracer's samples per stratified batch: within a batch "
                             "each flight's first collision and each scattering direction are "

@@ -196,6 +196,15 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   ClMedium medium = upload_medium(cl, grid);
   // Bricks of one coefficient need no voxel walk (pipelines/reference/inside_grid.hpp).
   std::vector<int32_t> uniform = uniform_bricks(grid, medium.bricks.brick, mesh_bounds);
+  // One coefficient everywhere a segment inside the mesh goes: no walks at all (only where the
+  // mesh bounds the medium, so that every tracked segment lies inside it).
+  const int32_t homogeneous = mesh_bounds && s.homogeneous && !marches(s, request.terms)
+                                  ? homogeneous_voxel(grid, uniform)
+                                  : -1;
+  if (homogeneous >= 0)
+    plan_stage(result.plan, "upload").reason +=
+        "; one coefficient inside the mesh: the path tracer's flights and optical depths take no "
+        "walk (homogeneous)";
   cl::Buffer uniform_buf(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
                          uniform.size() * sizeof(int32_t), uniform.data());
   cl::Buffer lights = upload(cl, pack_lights(scene.lights));
@@ -263,8 +272,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     int n = std::min(per_pass, cap - done);
     gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz,
                   medium.bricks.brick, medium.bricks.bx, medium.bricks.by, medium.bricks.bz,
-                  medium.sigma_s, medium.sigma_t, medium.majorant, uniform_buf, lights, light_count,
-                  g, camera, w, h, terms, n, done, s.seed, s.max_depth, ior,
+                  medium.sigma_s, medium.sigma_t, medium.majorant, uniform_buf, homogeneous, lights,
+                  light_count, g, camera, w, h, terms, n, done, s.seed, s.max_depth, ior,
                   int(mesh_bounds || dielectric), convex, interior_buf, bvh_bounds, bvh_links,
                   bvh_tris, int(!cells.triangles.empty()), cell_first, cell_tris, cell_skip,
                   int(!exits.empty()), exit_header, exit_first, exit_tris, batch, float(sq_scale),

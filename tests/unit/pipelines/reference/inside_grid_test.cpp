@@ -66,10 +66,11 @@ TEST(InteriorDepth, IsTheChebyshevDistanceToTheBoundaryLessTwo) {
 namespace scatter {
 namespace {
 
-// A 4^3 grid of 2^3 bricks: a cube of medium in voxels 0-2 (the 3^3 corner), the rest empty.
-VoxelGrid corner_cube(float sigma_s) {
+// An n^3 grid (4: of 2^3 bricks): a cube of medium in voxels 0-2 (the 3^3 corner), the rest
+// empty.
+VoxelGrid corner_cube(float sigma_s, int n = 4) {
   VoxelGrid g;
-  g.nx = g.ny = g.nz = 4;
+  g.nx = g.ny = g.nz = n;
   g.voxel = 1;
   g.occupancy.assign(g.count(), 0.0f);
   g.sigma_s.assign(3 * g.count(), 0.0f);
@@ -112,6 +113,28 @@ TEST(UniformBricks, NameAVoxelOfTheBricksOneCoefficient) {
   EXPECT_EQ(uniform_bricks(bare, 2, false)[0], 0);
   bare.sigma_s[3 * bare.index(1, 1, 1)] = 2.0f * (1 + 1e-4f);
   EXPECT_EQ(uniform_bricks(bare, 2, false)[0], -1);
+}
+
+// The whole medium is one coefficient when every brick a segment may reach is uniform with the
+// same one; bricks no segment reaches (-2) do not count.
+TEST(UniformBricks, AConstantMediumInsideTheMeshIsHomogeneous) {
+  VoxelGrid g = corner_cube(2.0f);
+  EXPECT_EQ(homogeneous_voxel(g, uniform_bricks(g, 2, true)), -1);  // empty voxels next to it
+  restrict_to_mesh(g);
+  EXPECT_EQ(homogeneous_voxel(g, uniform_bricks(g, 2, true)), 0);
+  VoxelGrid bare = corner_cube(2.0f);  // without the mesh the empty voxels are medium (zero)
+  EXPECT_EQ(homogeneous_voxel(bare, uniform_bricks(bare, 2, false)), -1);
+  // In a 6^3 grid, bricks of one voxel: (5, 5, 5) is three voxels from the cube, so no segment
+  // inside reaches it.
+  VoxelGrid big = corner_cube(2.0f, 6);
+  restrict_to_mesh(big);
+  std::vector<int32_t> single = uniform_bricks(big, 1, true);
+  EXPECT_EQ(single[big.index(5, 5, 5)], -2);
+  EXPECT_EQ(homogeneous_voxel(big, single), 0);
+  // Another coefficient in one voxel inside: two media.
+  big.sigma_s[3 * big.index(1, 1, 1)] = 3.0f;
+  EXPECT_EQ(homogeneous_voxel(big, uniform_bricks(big, 2, true)), -1);
+  EXPECT_EQ(homogeneous_voxel(big, uniform_bricks(big, 1, true)), -1);
 }
 
 }  // namespace

@@ -372,5 +372,21 @@ TEST(ReferencePipeline, CellListsGiveTheBvhsImage) {
     }
 }
 
+// A constant density inside the mesh is tracked without walks (setting homogeneous): the same
+// image from the same seed as the bricks' walks give; a noise density keeps the walks.
+TEST(ReferencePipeline, AConstantMediumGivesTheWalksImageWithoutThem) {
+  Scene s = small_scene("sphere", 24, 24);
+  RenderResult fast = reference_render(s, Terms::All, {{"spp", 8}, {"seed", 2}});
+  RenderResult walked =
+      reference_render(s, Terms::All, {{"spp", 8}, {"seed", 2}, {"homogeneous", 0}});
+  std::vector<uint8_t> all(size_t(s.width) * s.height, 1);
+  EXPECT_LT(relative_rmse(fast.image, walked.image, all), 1e-4);
+  EXPECT_NE(plan_stage(fast.plan, "upload").reason.find("homogeneous"), std::string::npos);
+  EXPECT_EQ(plan_stage(walked.plan, "upload").reason.find("homogeneous"), std::string::npos);
+  Scene bunny = small_scene("bunny", 16, 16);
+  RenderResult noise = reference_render(bunny, Terms::All, {{"spp", 3}});
+  EXPECT_EQ(plan_stage(noise.plan, "upload").reason.find("homogeneous"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace scatter
