@@ -38,13 +38,21 @@ typedef struct {
 
 // The exit of x + t wl from inside a convex mesh through light l's map: the first hit ahead
 // among the triangles of x's cell (the only one: a convex mesh is left once); false when the
-// light has no map or the cell holds no hit.
+// light has no map or the cell holds no hit. A point or spot light's map is a perspective from
+// the light (pipelines/reference/exit_maps.hpp).
 bool exit_map_hit(ExitMaps maps, Bvh bvh, int l, float3 x, float3 wl, float* t, float3* n) {
-  __global const float* h = maps.header + 12 * l;
+  __global const float* h = maps.header + 16 * l;
   int nu = (int)h[9], nv = (int)h[10];
   if (nu == 0) return false;
-  int i = (int)floor((dot(x, vload3(0, h)) - h[6]) * h[8]);
-  int j = (int)floor((dot(x, vload3(1, h)) - h[7]) * h[8]);
+  float3 e1 = vload3(0, h), e2 = vload3(1, h), q = x;
+  float z = 1.0f;
+  if (h[15] > 0.0f) {
+    q = x - vload3(4, h);
+    z = dot(q, cross(e1, e2));
+    if (!(z > 0.0f)) return false;
+  }
+  int i = (int)floor((dot(q, e1) / z - h[6]) * h[8]);
+  int j = (int)floor((dot(q, e2) / z - h[7]) * h[8]);
   if (i < 0 || j < 0 || i >= nu || j >= nv) return false;
   int c = (int)h[11] + j * nu + i;
   float best = INFINITY;
@@ -69,7 +77,8 @@ float3 next_event(const Medium* md, __global const float* lights, int light_coun
     float3 n;
     if (!use_mesh) {
       e *= exact_transmittance(md, x, wl, dist);
-    } else if (convex && maps.tris && exit_map_hit(maps, bvh, l, x, wl, &t_exit, &n)) {
+    } else if (convex && maps.tris && exit_map_hit(maps, bvh, l, x, wl, &t_exit, &n) &&
+               t_exit < dist) {
       // The only crossing (convex), found in the light's map: the medium up to it, and with a
       // dielectric its Fresnel transmittance (leaving: dot(wl, n) > 0).
       e *= exact_transmittance(md, x, wl, t_exit);

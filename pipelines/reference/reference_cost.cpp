@@ -31,12 +31,10 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
   if (scene.medium.ior != 1.0 || !s.voxel_boundary) {
     // FlatBvh (scene/bvh.hpp) on the host and its three buffers: ~2 nodes and 9 floats a triangle
     // (the mesh bounds the medium); the interior depth, a byte a voxel, and the convexity check's
-    // edge map; a convex mesh's exit maps, per directional light about 4 cells (16 B) and 14
+    // edge map; a convex mesh's exit maps, per light about 4 cells (16 B) and 14
     // list entries (56 B) a triangle, and their build's vectors on the host (4.5x that).
     double tris = double(scene.mesh->triangle_count());
-    double suns = 0;
-    for (const Light& l : scene.lights) suns += l.type == Light::Type::Directional;
-    const double maps = s.exit_maps && !march ? suns * tris * 72 : 0;
+    const double maps = s.exit_maps && !march ? double(scene.lights.size()) * tris * 72 : 0;
     frame.host("scene.mesh", tris * 100 + n + tris * 3 * 48 + maps * 4.5,
                "BVH, interior depth, edge map, exit maps");
     frame.device("scene.mesh", tris * 100 + n + maps, "BVH buffers, interior depth, exit maps");

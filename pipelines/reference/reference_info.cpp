@@ -26,10 +26,11 @@ const SettingsTable<ReferenceSettings>& reference_settings() {
                             "1 walk per-voxel triangle lists with the voxel DDA, 2 the lists "
                             "where they are short on a large mesh (uses_cell_lists)"),
                     flag("exit_maps", &ReferenceSettings::exit_maps, frame(),
-                         "1: on a convex mesh, shadow rays towards a directional light find "
-                         "their exit among the triangles of one cell of a map of the mesh's "
-                         "light-facing triangles over the plane normal to the light (the same "
-                         "hits); 0: by the mesh queries `cells` chooses"),
+                         "1: on a convex mesh, shadow rays find their exit among the "
+                         "triangles of one cell of a map of the mesh's light-facing triangles "
+                         "(over the plane normal to a directional light; in perspective from a "
+                         "point or spot light the whole mesh lies in front of), the same hits; "
+                         "0: by the mesh queries `cells` chooses"),
                     flag("homogeneous", &ReferenceSettings::homogeneous, frame(),
                          "1: where the mesh bounds a medium of one coefficient (a constant "
                          "density), the path tracer's flights and optical depths are taken "

@@ -191,8 +191,9 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   cl::Buffer exit_tris = upload_ints(cl, exits.triangles);
   if (!exits.empty())
     plan_stage(result.plan, "boundary").reason +=
-        "; the mesh is convex: shadow rays towards the directional lights find their exit in maps "
-        "of the light-facing triangles (exit_maps)";
+        "; the mesh is convex: shadow rays find their exit in maps of the light-facing "
+        "triangles (exit_maps) towards " +
+        std::to_string(exits.lights()) + " of " + std::to_string(scene.lights.size()) + " lights";
   ClMedium medium = upload_medium(cl, grid);
   // Bricks of one coefficient need no voxel walk (pipelines/reference/inside_grid.hpp).
   std::vector<int32_t> uniform = uniform_bricks(grid, medium.bricks.brick, mesh_bounds);
