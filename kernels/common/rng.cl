@@ -4,7 +4,12 @@
 
 // ---- Random numbers: PCG32, one stream per (pixel, sample, pass, seed) -------------------------
 
-typedef struct { ulong state; } Rng;
+// `next`, when >= 0, is the uniform the next draw returns (rng_offer: a stratified sample for a
+// draw the stream would otherwise make).
+typedef struct {
+  ulong state;
+  float next;
+} Rng;
 
 uint pcg_next(Rng* r) {
   ulong old = r->state;
@@ -15,10 +20,21 @@ uint pcg_next(Rng* r) {
 }
 
 // Uniform in [0, 1).
-float rng_uniform(Rng* r) { return (pcg_next(r) >> 8) * (1.0f / 16777216.0f); }
+float rng_uniform(Rng* r) {
+  if (r->next >= 0.0f) {
+    float u = r->next;
+    r->next = -1.0f;
+    return u;
+  }
+  return (pcg_next(r) >> 8) * (1.0f / 16777216.0f);
+}
+
+// The next draw returns u (in [0, 1)) instead of the stream's.
+void rng_offer(Rng* r, float u) { r->next = u; }
 
 Rng rng_seed(uint a, uint b, uint c) {
   Rng r;
+  r.next = -1.0f;
   r.state = ((ulong)a << 32) ^ ((ulong)b * 0x9E3779B97F4A7C15UL) ^ ((ulong)c * 0xBF58476D1CE4E5B9UL);
   for (int i = 0; i < 4; ++i) pcg_next(&r);
   return r;

@@ -10,9 +10,10 @@
 // reflection included) and shadow rays carry the Fresnel transmittance of their crossings.
 //
 // The samples of a pixel come in batches of `batch`: within a batch each flight's first
-// tentative collision and each scattering direction are stratified (padded Owen-scrambled Sobol,
-// kernels/common/rng.cl), the rest (null collisions, roulette, Fresnel) independent; batches are
-// independent of each other. batch 1: independent samples.
+// tentative collision with its real-or-null decision and each scattering direction are
+// stratified (padded Owen-scrambled Sobol, kernels/common/rng.cl), the rest (later tentative
+// collisions, roulette, Fresnel) independent; batches are independent of each other. batch 1:
+// independent samples.
 //
 // terms: bit 0 adds light scattered once (NEE at the first vertex), bit 1 light scattered more
 // than once. Each launch adds `spp` samples per pixel to sum and sum_sq (three channels each),
@@ -145,7 +146,11 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
     Rng r = rng_seed((uint)(y * width + x), (uint)sample, seed);
     Sampler sp = sampler_start((uint)(y * width + x), (uint)(sample % batch),
                                mix32(seed ^ mix32((uint)(sample / batch))));
-    float tau = exp_depth(sampler_1d(&sp));  // to the first tentative collision (delta_track)
+    // To the first tentative collision (delta_track) and its real-or-null decision (the next
+    // draw; a grey medium's is always real).
+    float2 f = sampler_2d(&sp);
+    float tau = exp_depth(f.x);
+    rng_offer(&r, f.y);
     float3 o = cam.position, d = d0;
     float3 weight = (float3)(1.0f), value = (float3)(0.0f);
     int depth = 0;
@@ -196,7 +201,9 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
         if (!(terms & 2)) break;  // single scattering only: the path ends at its first vertex
         float2 u = sampler_2d(&sp);
         d = hg_sample_u(d, g_phase, u.x, u.y);
-        tau = exp_depth(sampler_1d(&sp));
+        f = sampler_2d(&sp);
+        tau = exp_depth(f.x);
+        rng_offer(&r, f.y);
         float top = max3(weight);
         if (depth >= 3 && top < 0.25f) {  // Russian roulette on the largest channel's weight
           float q = fmax(top, 0.05f);
