@@ -10,7 +10,7 @@
 // reflection included) and shadow rays carry the Fresnel transmittance of their crossings.
 //
 // The samples of a pixel come in batches of `batch`: within a batch each flight's first
-// tentative collision with its real-or-null decision and each scattering direction are
+// tentative collision with (usually) its real-or-null decision and each scattering direction are
 // stratified (padded Owen-scrambled Sobol, kernels/common/rng.cl), the rest (later tentative
 // collisions, roulette, Fresnel) independent; batches are independent of each other. batch 1:
 // independent samples.
@@ -29,7 +29,7 @@ float3 light_irradiance3(Light L, float3 x, float3* wl, float* dist) {
                   light_irradiance(L, x, 2, wl, dist));
 }
 
-// The exit maps of the directional lights (pipelines/reference/exit_maps.hpp): per light a
+// The exit maps of the lights (pipelines/reference/exit_maps.hpp): per light a
 // header, the cells' list starts and the lists.
 typedef struct {
   __global const float* header;
@@ -55,7 +55,7 @@ bool exit_map_hit(ExitMaps maps, Bvh bvh, int l, float3 x, float3 wl, float* t, 
   int i = (int)floor((dot(q, e1) / z - h[6]) * h[8]);
   int j = (int)floor((dot(q, e2) / z - h[7]) * h[8]);
   if (i < 0 || j < 0 || i >= nu || j >= nv) return false;
-  int c = (int)h[11] + j * nu + i;
+  int c = as_int(h[11]) + j * nu + i;  // (an int's bits)
   float best = INFINITY;
   bool found = false;
   for (int k = maps.first[c], end = maps.first[c + 1]; k < end && !found; ++k)
@@ -146,8 +146,9 @@ __kernel void path_trace(float3 origin, float voxel, int nx, int ny, int nz, int
     Rng r = rng_seed((uint)(y * width + x), (uint)sample, seed);
     Sampler sp = sampler_start((uint)(y * width + x), (uint)(sample % batch),
                                mix32(seed ^ mix32((uint)(sample / batch))));
-    // To the first tentative collision (delta_track) and its real-or-null decision (the next
-    // draw; a grey medium's is always real).
+    // To the first tentative collision (delta_track), and the next draw, which is that
+    // collision's real-or-null decision unless the flight has none (a grey medium's is always
+    // real); else roulette or Fresnel takes it: uniform either way.
     float2 f = sampler_2d(&sp);
     float tau = exp_depth(f.x);
     rng_offer(&r, f.y);

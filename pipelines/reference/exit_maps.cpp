@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 
 namespace scatter {
@@ -43,7 +44,7 @@ ExitMaps exit_maps(const FlatBvh& bvh, const std::vector<Light>& lights) {
     for (int k = 0; k < 3; ++k) bounds.add(vertex(bvh, t, k));
   for (const Light& light : lights) {
     std::vector<float> h(kExitMapFloats, 0.f);
-    h[11] = static_cast<float>(maps.first.size());
+    h[11] = std::bit_cast<float>(int32_t(maps.first.size()));
     auto no_map = [&] { maps.header.insert(maps.header.end(), h.begin(), h.end()); };
     if (tris == 0) {
       no_map();
@@ -120,10 +121,11 @@ ExitMaps exit_maps(const FlatBvh& bvh, const std::vector<Light>& lights) {
         for (int i = i0; i <= i1; ++i) lists[size_t(j) * nu + i].push_back(int32_t(facing[k]));
     }
     const Vec3 &e1 = proj.e1, &e2 = proj.e2, &l = light.position;
-    h = {float(e1.x),     float(e1.y), float(e1.z), float(e2.x),
-         float(e2.y),     float(e2.z), float(u_lo), float(v_lo),
-         float(1 / cell), float(nu),   float(nv),   float(maps.first.size()),
-         float(l.x),      float(l.y),  float(l.z),  float(proj.point)};
+    h = {
+        float(e1.x),     float(e1.y), float(e1.z), float(e2.x),
+        float(e2.y),     float(e2.z), float(u_lo), float(v_lo),
+        float(1 / cell), float(nu),   float(nv),   std::bit_cast<float>(int32_t(maps.first.size())),
+        float(l.x),      float(l.y),  float(l.z),  float(proj.point)};
     for (const auto& l : lists) {
       maps.first.push_back(int32_t(maps.triangles.size()));
       maps.triangles.insert(maps.triangles.end(), l.begin(), l.end());
@@ -149,7 +151,7 @@ double exit_map_hit(const ExitMaps& maps, const FlatBvh& bvh, int light, const V
   const int j = int(std::floor((uv[1] - h[7]) * h[8]));
   if (i < 0 || j < 0 || i >= nu || j >= nv) return -1;
   const Vec3 d = proj.point ? normalize(proj.light - o) : proj.w;
-  const size_t cell = size_t(h[11]) + size_t(j) * nu + i;
+  const size_t cell = size_t(std::bit_cast<int32_t>(h[11])) + size_t(j) * nu + i;
   for (int k = maps.first[cell]; k < maps.first[cell + 1]; ++k) {
     double t = triangle_ray_hit(&bvh.triangles[12 * size_t(maps.triangles[k])], o, d);
     if (t > 0) return t;

@@ -22,8 +22,9 @@ struct ExitMaps {
   // Per light, kExitMapFloats floats: e1.xyz, e2.xyz (the plane's orthonormal axes; its normal
   // w = e1 x e2 points towards a directional light, from a point light to the mesh), u0, v0 (the
   // map's corner in them), 1 / cell, nu, nv (cells per axis; 0: no map for this light), where
-  // the light's cells start in `first`, the light's position and 1 for a point or spot light (a
-  // point p projects to ((p - L) . e1, (p - L) . e2) / ((p - L) . w)), 0 for a directional one.
+  // the light's cells start in `first` (an int32's bits: a float would round past 2^24 cells), the
+  // light's position and 1 for a point or spot light (a point p projects to ((p - L) . e1, (p - L)
+  // . e2) / ((p - L) . w)), 0 for a directional one.
   std::vector<float> header;
   // Per cell of every map (u fastest) and one more: where its list starts in `triangles`.
   std::vector<int32_t> first;

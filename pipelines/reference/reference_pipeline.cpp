@@ -29,9 +29,11 @@ bool marches(const ReferenceSettings& s, Terms terms) {
   return terms == Terms::Single && !s.mc;
 }
 
-// The batches a standard error is taken from at the least; with fewer, the samples' own variance
-// (which overstates a stratified mean's error: a conservative estimate).
-constexpr int kMinBatches = 4;
+// The batches a standard error is taken from alone at the least (31 degrees of freedom: with 12
+// a pixel's estimate was often several times too small where rare events carry the variance);
+// from 4 to 31 batches the larger of it and the samples' own variance (which usually overstates
+// a stratified mean's error); below 4 the samples' own.
+constexpr int kMinBatches = 32, kFewBatches = 4;
 
 // The kernel's sums (kernels/reference/path.cl), every sample carrying the three channels:
 // sum_sq and batch_sq hold squares times sq_scale; part is the open batch's sum.
@@ -39,7 +41,7 @@ struct Sums {
   std::vector<float> sum, sum_sq, part, batch_sq;
 };
 
-// Mean and standard error of the mean of `spp` samples in batches of `batch`. With k >= 4
+// Mean and standard error of the mean of `spp` samples in batches of `batch`. With k
 // complete batches of sums S_j, var(S) is their sample variance and the mean's variance
 // var(S) / (batch spp): the batches are independent, the samples within one are not.
 void finish_estimate(const Sums& s, int spp, int batch, double sq_scale, Image& mean,
@@ -48,14 +50,13 @@ void finish_estimate(const Sums& s, int spp, int batch, double sq_scale, Image& 
   const int k = spp / batch;
   for (size_t i = 0; i < s.sum.size(); ++i) {
     double m = s.sum[i] / n;
-    double var_mean;
-    if (batch > 1 && k >= kMinBatches) {
+    double var = std::max(0.0, s.sum_sq[i] / sq_scale / n - m * m) * n / std::max(1.0, n - 1);
+    double var_mean = var / n;
+    if (batch > 1 && k >= kFewBatches) {
       double total = s.sum[i] - s.part[i], mb = total / k;  // the complete batches' mean sum
       double var_s = std::max(0.0, s.batch_sq[i] / sq_scale / k - mb * mb) * k / (k - 1.0);
-      var_mean = var_s / (double(batch) * n);
-    } else {
-      double var = std::max(0.0, s.sum_sq[i] / sq_scale / n - m * m) * n / std::max(1.0, n - 1);
-      var_mean = var / n;
+      double batches = var_s / (double(batch) * n);
+      var_mean = k >= kMinBatches ? batches : std::max(batches, var_mean);
     }
     mean.rgb[i] = static_cast<float>(m);
     std_error.rgb[i] = static_cast<float>(std::sqrt(var_mean));

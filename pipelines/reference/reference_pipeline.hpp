@@ -26,9 +26,8 @@ struct ReferenceSettings {
   bool mc = false;
   bool voxel_boundary = false;
   int cells = 2;  // the mesh queries: 0 the BVH, 1 the voxels' lists, 2 whichever suits the mesh
-  bool exit_maps = true;
-  bool homogeneous = true;  // a constant medium inside the mesh is tracked without walks  // shadow
-                            // rays to directional lights exit a convex mesh through maps
+  bool exit_maps = true;    // shadow rays leave a convex mesh through maps of its light-facing side
+  bool homogeneous = true;  // a constant medium inside the mesh is tracked without walks
   int batch = 0;  // samples per stratified batch (kernels/reference/path.cl); 0: batch_for(spp)
   static ReferenceSettings read(const Settings& settings);
 };
