@@ -1,5 +1,5 @@
 // scatterd slab --tau T|inf --albedo A --g G --mu0 M --ior N --solver reference|lbl [--photons K]
-//               [--seed S] [--json]
+//               [--seed S] [--second 0|1] [--json]
 // lbl: the lbl pipeline's lattice at steady state (finite tau, ior 1; photons and seed unused).
 #include <cmath>
 #include <iostream>
@@ -19,6 +19,7 @@ struct SlabOptions {
   std::string solver = "reference";
   std::string device;
   bool json = false;
+  lbl::LblSlabOptions lbl;
 };
 
 int run_slab(SlabOptions o) {
@@ -40,7 +41,7 @@ int run_slab(SlabOptions o) {
   gpu::Gpu gpu(gpu::GpuOptions{o.device});
   nlohmann::json j;
   if (o.solver == "lbl")
-    j = lbl::run_lbl_slab(gpu.cl(), o.params);
+    j = lbl::run_lbl_slab(gpu.cl(), o.params, o.lbl);
   else
     j = run_reference_slab(gpu.cl(), o.params);
   if (o.json) {
@@ -70,6 +71,10 @@ Handler add_slab_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--device", o->device, "OpenCL device: P:D or part of its name");
   cmd->add_flag("--json", o->json, "Print one JSON object");
+  cmd->add_option("--second", o->lbl.second,
+                  "lbl: 1 computes the second scattering exactly and starts the lattice from it "
+                  "(the pipeline's setting `second`)")
+      ->capture_default_str();
   return [o] { return run_slab(*o); };
 }
 

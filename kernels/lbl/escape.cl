@@ -29,6 +29,34 @@ float3 escape_depth(const Grid* grid, __global const float* sigma_t, int3 own, f
   return tau;
 }
 
+// The grid of 2 x 2 x 2 voxels per cell over g ((n + 1) / 2 cells per side).
+Grid half_grid(const Grid* g) {
+  return make_grid(g->origin, 2.0f * g->voxel, (g->nx + 1) / 2, (g->ny + 1) / 2, (g->nz + 1) / 2,
+                   1, 0, 0, 0);
+}
+
+// The voxel of sample s of an (sx, sy, sz) grid of samples at every stride-th voxel.
+int3 sample_voxel(int s, int stride, int sx, int sy) {
+  return stride * (int3)(s % sx, (s / sx) % sy, s / (sx * sy));
+}
+
+// At voxel c, the trilinear mean of log x over the samples around it (3 floats a sample, that
+// grid), exponentiated; every sample with weight must be there (pipelines/lbl/escape.cpp).
+float3 log_trilinear(__global const float* samples, int3 c, int stride, int sx, int sy) {
+  int3 s0 = c / stride;
+  float3 f = convert_float3(c - stride * s0) / (float)stride;
+  float3 sum = (float3)(0.0f);
+  for (int corner = 0; corner < 8; ++corner) {
+    int3 o = (int3)(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+    float3 t = select(1.0f - f, f, o == 1);
+    float wc = t.x * t.y * t.z;
+    if (wc <= 0.0f) continue;
+    int3 s = s0 + o;
+    sum += wc * log(fmax(vload3((s.z * sy + s.y) * sx + s.x, samples), 1e-30f));
+  }
+  return exp(sum);
+}
+
 // The mean of exp(-tau) over the directions from the centre of voxel c. With far > 0 a ray
 // crosses the fine voxels for its first `far` voxel widths and then the `coarse` grid (2x2x2
 // voxels per cell, their mean sigma_t'): about half the steps, the same depth on average.
@@ -73,9 +101,9 @@ __kernel void escape_samples(float3 origin, float voxel, int nx, int ny, int nz,
   int id = get_global_id(0);
   if (id >= listed) return;
   int s = list[id];
-  int3 c = stride * (int3)(s % sx, (s / sx) % sy, s / (sx * sy));
+  int3 c = sample_voxel(s, stride, sx, sy);
   Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
-  Grid cg = make_grid(origin, 2.0f * voxel, (nx + 1) / 2, (ny + 1) / 2, (nz + 1) / 2, 1, 0, 0, 0);
+  Grid cg = half_grid(&g);
   float3 p = escape_at(&g, c, sigma_t, &cg, coarse, far, dirs, count);
   samples[3 * s] = p.x;
   samples[3 * s + 1] = p.y;
@@ -95,22 +123,10 @@ __kernel void escape_interpolate(float3 origin, float voxel, int nx, int ny, int
   int i = voxel_index(&g, c.x, c.y, c.z);
   float3 p = (float3)(1.0f);
   if (mode[i] == 2) {
-    Grid cg = make_grid(origin, 2.0f * voxel, (nx + 1) / 2, (ny + 1) / 2, (nz + 1) / 2, 1, 0, 0, 0);
+    Grid cg = half_grid(&g);
     p = escape_at(&g, c, sigma_t, &cg, coarse, far, dirs, count);
   } else if (mode[i] == 1) {
-    int3 s0 = c / stride;
-    float3 f = convert_float3(c - stride * s0) / (float)stride;
-    p = (float3)(0.0f);
-    for (int corner = 0; corner < 8; ++corner) {
-      int3 o = (int3)(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-      float3 t = select(1.0f - f, f, o == 1);
-      float wc = t.x * t.y * t.z;
-      if (wc <= 0.0f) continue;
-      int3 s = s0 + o;
-      int k = 3 * ((s.z * sy + s.y) * sx + s.x);
-      p += wc * log(fmax((float3)(samples[k], samples[k + 1], samples[k + 2]), 1e-30f));
-    }
-    p = exp(p);
+    p = log_trilinear(samples, c, stride, sx, sy);
   }
   out[3 * i] = p.x;
   out[3 * i + 1] = p.y;

@@ -27,12 +27,16 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
   //   Lattice is made; ClVolume (upload_volume) 40 B; Lattice (lattice.cpp): pt, ps, w 36 B
   //   (18 directions: and the diagonals' 36 B), src and irr 24 B, f_[2] 2 x 3 x directions
   //   floats, iface_ (blocked) 2 x 72 / block B; deposit 12 B and (g != 0) source 12 B, flow
-  //   24 B and (flux_phase, 6 directions) the lattice's flux 12 B.
+  //   24 B and (flux_phase, 6 directions) the lattice's flux 12 B; the second scattering's
+  //   gather (second.cpp, 6 directions, not interleaved) sigma_t' 12 B, its half-resolution grid
+  //   and source 3 B, the sampling's mode 1 B, samples and list 2 B, second and emission 24 B
+  //   (host: sigma_t' and the sampling, 13 B).
   // Measured RSS: 72^3 346 MB, 104^3 628 MB (estimates 370, 671 with ~220 MB of contexts).
-  double host = kGridBytes + 44 + 72;
-  double device = 40 + 36 * (d == 18 ? 2 : 1) + 24 + 2 * 12 * d +
-                  (s.blocked ? 144.0 / s.block : 0) + 12 +
-                  (scene.medium.g != 0 ? 12 + 24 + (d == 6 && s.flux_phase ? 12 : 0) : 0);
+  const bool second = s.second && d == 6 && s.interleave == 0 && request.terms != Terms::Single;
+  double host = kGridBytes + 44 + 72 + (second ? 13 : 0);
+  double device =
+      40 + 36 * (d == 18 ? 2 : 1) + 24 + 2 * 12 * d + (s.blocked ? 144.0 / s.block : 0) + 12 +
+      (scene.medium.g != 0 ? 12 + 24 + (d == 6 && s.flux_phase ? 12 : 0) : 0) + (second ? 42 : 0);
   l.host("scene.voxels", n * host,
          grid + " x " + short_number(host) + " B (grid, volume, coefficients)");
   l.device("scene.voxels", n * device,
@@ -72,6 +76,15 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
     kept += steps * n * 30e-9 * (d == 18 ? 10 : 1);
     l.time("settings.max_steps", steps * n * 30e-9 * (d == 18 ? 10 : 1),
            std::to_string(int(steps)) + " lattice steps x " + grid);
+    // The second scattering's gather, each light change: 32 rays from a voxel in 8 and those
+    // next to surfaces, across the grid; measured 0.77-1.44 s at 72^3 (the shipped scenes at
+    // 64 voxels), taken as 60 ns a node per voxel of the long side.
+    if (second) {
+      const double side_voxels = std::max({g.nx, g.ny, g.nz});
+      kept += n * side_voxels * 60e-9;
+      l.time("settings.second", n * side_voxels * 60e-9,
+             "the second scattering's gather over " + grid);
+    }
   }
   // View: a ray a pixel through the grid; measured 4096 px x 250 steps 66 ms (65 ns a step).
   l.time("scene.image.width", px * ray_steps * 100e-9,

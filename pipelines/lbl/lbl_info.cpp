@@ -39,6 +39,11 @@ const SettingsTable<LblSettings>& lbl_settings() {
        flag("flux_phase", &S::flux_phase, frame(),
             "1: with g != 0 the lattice's light is scattered towards the eye by 1 + 3 g m . w, m "
             "its net flux over its total (6 directions, |m| <= 1/3); 0: isotropically"),
+       flag("second", &S::second, kept("diffusion"),
+            "1: the light's second scattering computed exactly (a gather over 32 directions "
+            "through the scaled medium, at escape_stride and escape_far), the lattice carrying "
+            "the third and later events; 0: the lattice from the first scattering's light (6 "
+            "directions, not with interleave)"),
        setting("tolerance", &S::tolerance, 1e-6, 0.5, kept("diffusion"),
                "relative change per check that ends the diffusion"),
        setting("max_steps", &S::max_steps, 1, 1000000, kept("diffusion"),

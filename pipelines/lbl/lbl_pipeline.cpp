@@ -11,6 +11,7 @@
 #include "pipelines/lbl/escape.hpp"
 #include "pipelines/lbl/interleave.hpp"
 #include "pipelines/lbl/light_rays.hpp"
+#include "pipelines/lbl/second.hpp"
 
 namespace scatter {
 namespace {
@@ -84,6 +85,10 @@ struct State {
   cl::Buffer lattice_flux;    // flux_phase: the lattice's light direction m (3 per voxel), made
                               // when first used
   bool flux_current = false;  // lattice_flux is the last diffusion's
+  std::unique_ptr<SecondScatter> gather;  // setting second: its gather, made when first used
+  cl::Buffer second;         // setting second: the light's second scattering (3 per voxel)
+  cl::Buffer emission;       // then the multiple term's emission, irr + second / (1 - g)
+  bool with_second = false;  // the last diffusion carried the third and later events
   double max_sigma_s = 0;
   bool diffused = false;  // the lattice has converged for the loaded deposit and settings
 };
@@ -96,6 +101,12 @@ namespace {
 // (setting flux_phase; the 6-direction lattice's flux only).
 bool uses_flux_phase(const Scene& scene, const LblSettings& s) {
   return s.flux_phase && scene.medium.g != 0 && s.directions == 6;
+}
+
+// The lattice starts from the light's exactly computed second scattering (setting second; the
+// 6-direction lattice, not interleaved with the march).
+bool uses_second(const LblSettings& s) {
+  return s.second && s.directions == 6 && s.interleave == 0;
 }
 
 // Which stages a frame runs, from the scene, the request and what the last frame left.
@@ -149,7 +160,16 @@ StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
                                 : "global lattice") +
           ", " + std::to_string(s.directions) + " directions + rest, until the change is under " +
           short_number(s.tolerance) + " (at most " + std::to_string(s.max_steps) + " steps)" +
-          (!d.material && s.warm ? ", warm start from the last state" : "");
+          (!d.material && s.warm ? ", warm start from the last state" : "") +
+          (uses_second(s)
+               ? "; from the light's second scattering, gathered over " +
+                     std::to_string(lbl::kSecondDirections) +
+                     " directions through the scaled medium" +
+                     (s.escape_stride > 1 ? " at one voxel in " + std::to_string(s.escape_stride) +
+                                                " per axis as the escape correction"
+                                          : std::string(" at every voxel")) +
+                     " (the lattice carries the third and later events)"
+               : std::string());
   return {"diffuse", d.diffuse, why};
 }
 
@@ -321,9 +341,25 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   }
   if (d.diffuse) {
     if (!s.warm && interleaved_steps == 0) st.lattice->clear();
-    st.lattice->set_source(st.source);
+    st.with_second = uses_second(s);
+    if (st.with_second) {
+      const size_t bytes = 3 * st.volume.count() * sizeof(float);
+      if (!st.gather) {
+        st.gather = std::make_unique<lbl::SecondScatter>(cl, st.volume, st.device, scene.medium.g,
+                                                         s.escape_stride, s.escape_far);
+        st.second = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, bytes);
+        st.emission = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, bytes);
+      }
+      st.gather->run(st.source, st.second);
+      queue.finish();
+      clock.stop("second");
+    }
+    st.lattice->set_source(st.with_second ? st.second : st.source);
     lbl::Convergence c =
         st.lattice->converge(s.tolerance, s.max_steps, s.check_every, request.progress);
+    if (st.with_second)
+      lbl::add_second(cl, st.lattice->irradiance_buffer(), st.second, scene.medium.g,
+                      st.volume.count(), st.emission);
     queue.finish();
     st.diffused = true;
     st.flux_current = false;
@@ -362,8 +398,8 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   }
   const lbl::ClVolume& v = st.device;
   gpu::set_args(k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_t, v.n, v.grad, st.deposit,
-                st.lattice->irradiance_buffer(), w_single, w_multiple, st.flow,
-                float(scene.medium.g), scene.medium.g != 0 ? 1 : 0, v.sigma_s,
+                st.with_second ? st.emission : st.lattice->irradiance_buffer(), w_single,
+                w_multiple, st.flow, float(scene.medium.g), scene.medium.g != 0 ? 1 : 0, v.sigma_s,
                 float(s.scaled_view ? scene.medium.g : 0.0),
                 flux_phase ? st.lattice_flux : st.deposit, float(flux_phase ? scene.medium.g : 0.0),
                 camera, w, h, d.bend ? 1 : 0, float(s.step * st.volume.voxel), out);

@@ -46,6 +46,7 @@ struct LblSettings {
   double escape_far = 4;
   bool scaled_view = false;
   bool flux_phase = false;
+  bool second = true;
   double tolerance = 1e-3;
   int max_steps = 20000;
   int check_every = 16;

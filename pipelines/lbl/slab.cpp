@@ -48,6 +48,39 @@ std::pair<double, double> layer_escape(int k, int layers, double d,
   return {up / (2 * d), down / (2 * d)};
 }
 
+// The chance that light emitted isotropically and evenly over a layer of optical thickness d
+// reaches a plane D beyond the layer's near face (either way: half the directions), without a
+// collision: (1 / 2 d) integral_0^1 mu (exp(-D / mu) - exp(-(D + d) / mu)) d mu.
+double layer_reach(double D, double d, const std::vector<std::pair<double, double>>& nodes) {
+  double sum = 0;
+  for (auto [mu, dmu] : nodes) sum += mu * (std::exp(-D / mu) - std::exp(-(D + d) / mu)) * dmu;
+  return sum / (2 * d);
+}
+
+// The second scattering exactly (the pipeline's setting `second`): what the light `first` emits
+// isotropically per layer (uniform layers of optical thickness d, albedo a) scatters next, per
+// layer: a times the chance to collide in each layer, a convolution over the layers' distance.
+std::vector<float> slab_second(const std::vector<float>& first, int layers, double d, double a,
+                               const std::vector<std::pair<double, double>>& nodes) {
+  // kernel[m]: from a layer into one m layers away (either side); 0: its own.
+  std::vector<double> kernel{1 - 2 * layer_reach(0, d, nodes)};
+  for (int m = 1; m < layers; ++m) {
+    double k = layer_reach((m - 1) * d, d, nodes) - layer_reach(m * d, d, nodes);
+    kernel.push_back(k);
+    if (k < 1e-12) break;
+  }
+  std::vector<float> second(first.size(), 0.f);
+  const int reach = static_cast<int>(kernel.size());
+  for (int k = 0; k < layers; ++k)
+    for (int ch = 0; ch < 3; ++ch) {
+      double sum = 0;
+      for (int j = std::max(0, k - reach + 1); j < std::min(layers, k + reach); ++j)
+        sum += kernel[std::abs(k - j)] * first[3 * j + ch];
+      second[3 * k + ch] = static_cast<float>(a * sum);
+    }
+  return second;
+}
+
 }  // namespace
 
 SingleScattering slab_single_scattering(const SlabParams& p) {
@@ -150,8 +183,16 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   for (int k = 0; k < r.layers; ++k) {
     double in = std::exp(-k * dtau_r / p.mu0);
     double s = in * albedo_r * -std::expm1(-dtau_r / p.mu0);
-    for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(s) * escape[3 * k + c];
+    for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(s);
   }
+  // With `second`: the lattice from the second scattering (in the scaled medium), which the
+  // view then sees next to the lattice's irradiance.
+  std::vector<float> second;
+  if (o.second) {
+    second = slab_second(source, r.layers, dtau_r, albedo_r, esc_nodes);
+    source = second;
+  }
+  for (size_t i = 0; i < source.size(); ++i) source[i] *= escape[i];
   lattice.set_source(source);
   Convergence c = lattice.converge(o.tolerance, o.max_steps, 64);
   r.steps = c.steps;
@@ -187,7 +228,8 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   const double view_emit = o.scaled_view ? 1 - p.g : 1;
   double R_multiple = 0, T_multiple = 0;
   for (int k = 0; k < r.layers; ++k) {
-    double e = irr[3 * k] * view_emit;
+    // irr in the real sigma_s's share; the second scattering in the scaled medium's.
+    double e = (irr[3 * k] + (o.second ? second[3 * k] / (1 - p.g) : 0.0)) * view_emit;
     if (!(e > 0)) continue;
     auto [e_up, e_down] = layer_escape(k, r.layers, view_dtau, esc_nodes);
     R_multiple += e * e_up;

@@ -22,6 +22,7 @@ struct LblSlabOptions {
   int max_steps = 400000;
   bool escape = true;       // scale each layer's emission by the escape correction (escape.hpp)
   bool scaled_view = true;  // as the pipeline's setting of that name
+  bool second = true;       // as the pipeline's setting: the second scattering exactly
 };
 
 // Fractions of the incident power.

@@ -8,20 +8,13 @@
 #include <numbers>
 
 #include "../../test_util.hpp"
+#include "test_volumes.hpp"
 
 namespace scatter::lbl {
 namespace {
 
-// An n^3 grid of voxels 1.6 / n wide (the box [-0.8, 0.8]^3) filled with one medium.
-Volume filled(float sigma_s, float sigma_t, int n = 16) {
-  Volume v;
-  v.nx = v.ny = v.nz = n;
-  v.voxel = 1.6 / n;
-  v.origin = {-0.8, -0.8, -0.8};
-  v.sigma_s.assign(3 * v.count(), sigma_s);
-  v.sigma_t.assign(3 * v.count(), sigma_t);
-  return v;
-}
+using test_volumes::ball;
+using test_volumes::filled;
 
 // The kernel against the same mean over the same 64 Fibonacci directions on the CPU: in a
 // homogeneous box the optical depth to the edge is sigma_t' times the distance to the box, the
@@ -48,26 +41,6 @@ TEST(LblEscape, ExactEscapeMatchesACpuComputation) {
     }
     EXPECT_NEAR(p[3 * v.index(i, 8, 7)], mean, 1e-4 + 1e-3 * mean) << "i " << i;
   }
-}
-
-// A ball (radius 0.65) in a 32^3 grid of voxels 0.05 wide: sigma_s 2, sigma_t 2.05 (0.1 per
-// voxel, as the shipped scenes at 64 voxels), twice as dense above z 0.2 (a density step), with
-// an absorbing block that does not scatter (a blocker) inside.
-Volume ball() {
-  Volume v = filled(0, 0, 32);
-  for (int k = 0; k < 32; ++k)
-    for (int j = 0; j < 32; ++j)
-      for (int i = 0; i < 32; ++i) {
-        Vec3 p = v.origin + Vec3{i + 0.5, j + 0.5, k + 0.5} * v.voxel;
-        if (p.x * p.x + p.y * p.y + p.z * p.z > 0.65 * 0.65) continue;
-        double d = p.z > 0.2 ? 2 : 1;
-        bool blocker = std::abs(p.x + 0.25) < 0.1 && std::abs(p.y) < 0.1 && std::abs(p.z) < 0.1;
-        for (int c = 0; c < 3; ++c) {
-          v.sigma_s[3 * v.index(i, j, k) + c] = blocker ? 0.f : float(2 * d);
-          v.sigma_t[3 * v.index(i, j, k) + c] = blocker ? 100.f : float(2.05 * d);
-        }
-      }
-  return v;
 }
 
 // At stride 2 (the voxels alone, far 0) the kernels against the CPU doing the same from the
