@@ -60,11 +60,12 @@ function finish() {
   const L = rec.light, LF = rec.lightFull, C = rec.camera, CF = rec.cameraFull;
   const w = (f) => f.length ? `${f[0].width}x${f[0].height}` : '-';
   console.log(`lbl ${scene} terms ${terms}, ${L.length} light and ${C.length} camera changes (medians, ms)`);
-  console.log(`light change  (${w(L)}): march ${stage(L, 'march').toFixed(1)}, diffuse ${stage(L, 'diffuse').toFixed(1)} ` +
+  console.log(`light change  (${w(L)}): march ${stage(L, 'march').toFixed(1)}, second ${stage(L, 'second').toFixed(1)}, ` +
+              `diffuse ${stage(L, 'diffuse').toFixed(1)} ` +
               `(${steps(L)} steps, warm), view ${stage(L, 'view').toFixed(1)}, total ${total(L).toFixed(1)}`);
   console.log(`camera change (${w(C)}): view ${stage(C, 'view').toFixed(1)}, total ${total(C).toFixed(1)}`);
   console.log(`still frame   (${w(CF)}): view ${stage(CF, 'view').toFixed(1)}, total ${total(CF).toFixed(1)}`);
-  console.log(`light change at ${w(CF)}: march + diffuse + view = ` +
-              `${(stage(L, 'march') + stage(L, 'diffuse') + stage(CF, 'view')).toFixed(1)}`);
+  console.log(`light change at ${w(CF)}: march + second + diffuse + view = ` +
+              `${(stage(L, 'march') + stage(L, 'second') + stage(L, 'diffuse') + stage(CF, 'view')).toFixed(1)}`);
   ws.close();
 }
