@@ -350,7 +350,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
         st.second = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, bytes);
         st.emission = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, bytes);
       }
-      st.gather->run(st.source, st.second);
+      st.gather->run(st.source, st.second, request.progress);
       queue.finish();
       clock.stop("second");
     }

@@ -55,9 +55,15 @@ SecondScatter::SecondScatter(gpu::ClContext& cl, const Volume& v, const ClVolume
                         std::max<size_t>(1, 3 * size_t(n_[0]) * n_[1] * n_[2]) * sizeof(float));
 }
 
-void SecondScatter::run(const cl::Buffer& source, cl::Buffer& out) {
+void SecondScatter::run(const cl::Buffer& source, cl::Buffer& out,
+                        const std::function<void(double)>& progress) {
   cl::Program& program = second_program(cl_);
   auto& queue = cl_.queue();
+  auto launched = [&] {
+    if (!progress) return;
+    queue.finish();
+    progress(0);
+  };
   const int cx = (v_.nx + 1) / 2, cy = (v_.ny + 1) / 2, cz = (v_.nz + 1) / 2;
   if (far_ > 0) {
     cl::Kernel k(program, "second_coarse");
@@ -69,13 +75,24 @@ void SecondScatter::run(const cl::Buffer& source, cl::Buffer& out) {
     gpu::set_args(k, v_.origin, v_.voxel, v_.nx, v_.ny, v_.nz, sigma_t_, source, coarse_t_,
                   coarse_source_, float(far_), dirs_, directions_, stride_, n_[0], n_[1], list_,
                   cl_int(samples_count_), samples_);
-    queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(samples_count_));
+    for (size_t first = 0; first < samples_count_; first += kSecondChunk) {
+      queue.enqueueNDRangeKernel(k, cl::NDRange(first),
+                                 cl::NDRange(std::min(kSecondChunk, samples_count_ - first)));
+      launched();
+    }
   }
   cl::Kernel k(program, "second_interpolate");
   gpu::set_args(k, v_.origin, v_.voxel, v_.nx, v_.ny, v_.nz, sigma_t_, source, coarse_t_,
                 coarse_source_, float(far_), mode_, dirs_, directions_, stride_, n_[0], n_[1],
                 samples_, v_.sigma_s, float(g_), out);
-  queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(v_.nx, v_.ny, v_.nz));
+  // Slabs of whole z layers, about kSecondChunk voxels each.
+  const size_t layer = size_t(v_.nx) * v_.ny;
+  const int slab = static_cast<int>(std::max<size_t>(1, kSecondChunk / std::max<size_t>(1, layer)));
+  for (int z = 0; z < v_.nz; z += slab) {
+    queue.enqueueNDRangeKernel(k, cl::NDRange(0, 0, z),
+                               cl::NDRange(v_.nx, v_.ny, std::min(slab, v_.nz - z)));
+    launched();
+  }
 }
 
 void add_second(gpu::ClContext& cl, const cl::Buffer& irr, const cl::Buffer& second, double g,

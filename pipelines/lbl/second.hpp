@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 
 #include "gpu/cl_context.hpp"
 #include "pipelines/lbl/volume.hpp"
@@ -17,6 +18,8 @@ namespace scatter::lbl {
 
 // Directions of the gather (a Fibonacci spiral, as the escape correction's).
 constexpr int kSecondDirections = 32;
+// Gathers per launch (a cancel point between launches).
+constexpr size_t kSecondChunk = 65536;
 
 // The gather's buffers for one material: sigma_t' at full and half resolution and, with
 // `stride` > 1, the escape correction's sampling (pipelines/lbl/escape.hpp: every stride-th
@@ -29,8 +32,11 @@ class SecondScatter {
                 int stride = 1, double far = 0, int directions = kSecondDirections);
   // Q2 per voxel and channel into `out` (3 floats per voxel, the source's units: power per voxel
   // per lattice step): sigma_s' V times the fluence of the light `source` emits isotropically.
-  // Enqueued, not waited for.
-  void run(const cl::Buffer& source, cl::Buffer& out);
+  // The gathers run in launches of about kSecondChunk voxels; with `progress`, each launch is
+  // waited for and progress(0) called after it (it may throw to stop: a cancelled render).
+  // Otherwise enqueued, not waited for.
+  void run(const cl::Buffer& source, cl::Buffer& out,
+           const std::function<void(double)>& progress = {});
   // The voxels whose gather runs (samples and voxels computed themselves).
   size_t gathers() const { return gathers_; }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <stdexcept>
 
 #include "../../test_util.hpp"
 #include "pipelines/common/cl_scene.hpp"
@@ -80,6 +81,19 @@ TEST(LblSecond, ReducedResolutionIsNearTheFullOne) {
     return x;
   };
   std::vector<float> full = q2(1, 0), reduced = q2(2, 4);
+  // In launches with a cancel point after each: the same values, and a throw stops it.
+  {
+    cl::Buffer out(cl.context(), CL_MEM_READ_WRITE, 3 * v.count() * sizeof(float));
+    int calls = 0;
+    SecondScatter(cl, v, d, 0.0, 2, 4).run(src, out, [&](double) { ++calls; });
+    std::vector<float> x(3 * v.count());
+    cl.queue().enqueueReadBuffer(out, CL_TRUE, 0, x.size() * sizeof(float), x.data());
+    EXPECT_EQ(x, reduced);
+    EXPECT_GE(calls, 2);  // the samples, then the voxels (32^3 in one launch of kSecondChunk)
+    EXPECT_THROW(SecondScatter(cl, v, d, 0.0, 2, 4)
+                     .run(src, out, [](double) { throw std::runtime_error("cancelled"); }),
+                 std::runtime_error);
+  }
   double sum_full = 0, sum_reduced = 0, error = 0, worst = 0;
   int n = 0;
   for (size_t i = 0; i < full.size(); ++i) {
