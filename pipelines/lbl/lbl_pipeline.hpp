@@ -5,14 +5,17 @@
 //            Gaussian-smoothed) and grad n (pipelines/lbl/volume)
 //   march    light rays from every light deposit the power they scatter per voxel, bending by
 //            the ray equation where n varies (kernels/lbl/march.cl)
-//   diffuse  lattice-Boltzmann diffusion of the deposit (global or in blocks), to convergence,
-//   warm-started
-//            from the last state (pipelines/lbl/lattice, kernels/lbl/lattice.cl)
+//   second   the light's second scattering gathered exactly from the deposit (setting second,
+//            pipelines/lbl/second, kernels/lbl/second.cl)
+//   diffuse  lattice-Boltzmann diffusion of it (or of the deposit; global or in blocks), to
+//            convergence, warm-started from the last state (pipelines/lbl/lattice,
+//            kernels/lbl/lattice.cl)
 //   view     per pixel, the eye ray (refracted where n varies) gathers the deposit (single term)
 //            and the lattice's scattered power (multiple term) (kernels/lbl/view.cl)
 //
 // The volume, the deposit and the lattice's state are kept between frames: a camera-only change
-// runs only the view pass; a light change re-marches and warm-starts the lattice.
+// runs only the view pass; a light change re-marches and warm-starts the lattice. What is kept,
+// and which stages a frame runs: pipelines/lbl/lbl_frame.
 //
 // Settings: the table in pipelines/lbl/lbl_info.cpp (`scatterd pipelines`, docs/pipelines/lbl.md).
 #pragma once

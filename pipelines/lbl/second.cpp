@@ -59,10 +59,17 @@ void SecondScatter::run(const cl::Buffer& source, cl::Buffer& out,
                         const std::function<void(double)>& progress) {
   cl::Program& program = second_program(cl_);
   auto& queue = cl_.queue();
+  // Launches: the samples' in chunks, then the interpolation's in slabs of whole z layers, each
+  // about kSecondChunk voxels.
+  const size_t layer = size_t(v_.nx) * v_.ny;
+  const int slab = static_cast<int>(std::max<size_t>(1, kSecondChunk / std::max<size_t>(1, layer)));
+  const size_t launches =
+      (samples_count_ + kSecondChunk - 1) / kSecondChunk + size_t((v_.nz + slab - 1) / slab);
+  size_t done = 0;
   auto launched = [&] {
     if (!progress) return;
     queue.finish();
-    progress(0);
+    progress(double(++done) / double(launches));
   };
   const int cx = (v_.nx + 1) / 2, cy = (v_.ny + 1) / 2, cz = (v_.nz + 1) / 2;
   if (far_ > 0) {
@@ -85,9 +92,6 @@ void SecondScatter::run(const cl::Buffer& source, cl::Buffer& out,
   gpu::set_args(k, v_.origin, v_.voxel, v_.nx, v_.ny, v_.nz, sigma_t_, source, coarse_t_,
                 coarse_source_, float(far_), mode_, dirs_, directions_, stride_, n_[0], n_[1],
                 samples_, v_.sigma_s, float(g_), out);
-  // Slabs of whole z layers, about kSecondChunk voxels each.
-  const size_t layer = size_t(v_.nx) * v_.ny;
-  const int slab = static_cast<int>(std::max<size_t>(1, kSecondChunk / std::max<size_t>(1, layer)));
   for (int z = 0; z < v_.nz; z += slab) {
     queue.enqueueNDRangeKernel(k, cl::NDRange(0, 0, z),
                                cl::NDRange(v_.nx, v_.ny, std::min(slab, v_.nz - z)));

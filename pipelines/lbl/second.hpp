@@ -33,7 +33,8 @@ class SecondScatter {
   // Q2 per voxel and channel into `out` (3 floats per voxel, the source's units: power per voxel
   // per lattice step): sigma_s' V times the fluence of the light `source` emits isotropically.
   // The gathers run in launches of about kSecondChunk voxels; with `progress`, each launch is
-  // waited for and progress(0) called after it (it may throw to stop: a cancelled render).
+  // waited for and progress(f) called after it, f the fraction of launches done (it may throw to
+  // stop: a cancelled render).
   // Otherwise enqueued, not waited for.
   void run(const cl::Buffer& source, cl::Buffer& out,
            const std::function<void(double)>& progress = {});

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <stdexcept>
 
 #include "../../test_util.hpp"
 #include "pipelines/metrics.hpp"
@@ -183,6 +184,54 @@ TEST(LblPipeline, LightMoveWarmStartsTheLattice) {
   EXPECT_LT(warm_steps, cold_steps);
   auto mask = coverage_mask(s, voxelize(s, {.resolution = s.voxels}));
   EXPECT_LT(relative_rmse(a, b, mask), 0.01);
+}
+
+// A diffusion cancelled (its progress throws, as a cancelled job's does) leaves nothing that a
+// later frame takes for converged: going back to the settings of the frame before, the next
+// frame diffuses again and gives what a fresh pipeline gives, whether the cancel came in the
+// lattice or in the second scattering's gather. The gather is kept when only the lattice's own
+// settings change.
+TEST(LblPipeline, ACancelledDiffusionLeavesNothingStale) {
+  Scene s = sphere(16, 16);
+  Settings with = {{"tolerance", 1e-4}}, without = {{"tolerance", 1e-4}, {"second", 0}};
+  auto cancel = [](double) { throw std::runtime_error("cancelled"); };
+  auto near_fresh = [&](const Settings& settings, const Image& got) {
+    LblPipeline fresh(test::shared_gpu());
+    Image want = fresh.render(s, {Terms::Multiple, settings}).image;
+    auto mask = coverage_mask(s, voxelize(s, {.resolution = s.voxels}));
+    EXPECT_LT(relative_rmse(got, want, mask), 0.01);
+  };
+  auto has_stage = [](const RenderResult& r, const std::string& name) {
+    for (const auto& t : r.timings)
+      if (t.stage == name) return true;
+    return false;
+  };
+  LblPipeline p(test::shared_gpu());
+  p.render(s, {Terms::Multiple, with});
+  // Cancelled in the lattice (second 0 gathers nothing), then back to second 1.
+  EXPECT_THROW(p.render(s, {Terms::Multiple, without, cancel}), std::runtime_error);
+  EXPECT_TRUE(stage(p.plan(s, {Terms::Multiple, with}), "diffuse")->run);
+  RenderResult back = p.render(s, {Terms::Multiple, with});
+  EXPECT_FALSE(has_stage(back, "second"));  // the gather of this deposit is kept
+  near_fresh(with, back.image);
+  // And the other way: cancelled with second 1 (in the gather: the light has moved), back to
+  // second 0.
+  s.lights[0].position = {3.2, 3, 2.8};
+  p.render(s, {Terms::Multiple, without});
+  EXPECT_THROW(p.render(s, {Terms::Multiple, with, cancel}), std::runtime_error);  // in the gather
+  EXPECT_TRUE(stage(p.plan(s, {Terms::Multiple, without}), "diffuse")->run);
+  near_fresh(without, p.render(s, {Terms::Multiple, without}).image);
+  // The gather cancelled above runs again; a new tolerance alone keeps it.
+  RenderResult again = p.render(s, {Terms::Multiple, with});
+  EXPECT_TRUE(has_stage(again, "second"));
+  near_fresh(with, again.image);
+  Settings looser = with;
+  looser["tolerance"] = 3e-4;
+  Plan plan = p.plan(s, {Terms::Multiple, looser});
+  EXPECT_NE(stage(plan, "diffuse")->reason.find("second scattering, kept"), std::string::npos);
+  RenderResult kept = p.render(s, {Terms::Multiple, looser});
+  EXPECT_FALSE(has_stage(kept, "second"));
+  near_fresh(looser, kept.image);
 }
 
 // Marching in rounds interleaved with lattice steps reaches the sequential steady state (up to

@@ -1,0 +1,183 @@
+#include "pipelines/lbl/lbl_frame.hpp"
+
+#include <cmath>
+
+#include "bake/cache.hpp"
+#include "core/errors.hpp"
+#include "pipelines/asset_key.hpp"
+
+namespace scatter::lbl {
+namespace {
+
+// A scattered photon's chance to scatter again somewhere in the volume, at most.
+double second_scatter_bound(double max_sigma_s, double longest_side) {
+  return -std::expm1(-max_sigma_s * longest_side);
+}
+
+
+}  // namespace
+
+std::string material_key(const Scene& scene, const LblSettings& s) {
+  BakeKey k = asset_key(scene);
+  k.add("g", scene.medium.g).add("ior", scene.medium.ior);
+  lbl_settings().add_to(k, s, Shapes::What::Kept, "material");
+  return k.hex();
+}
+
+std::string light_key(const Scene& scene, const LblSettings& s) {
+  BakeKey k;
+  for (const Light& l : scene.lights) {
+    k.add("type", double(int(l.type))).add("intensity", l.intensity);
+    k.add("inner", l.inner_deg).add("outer", l.outer_deg);
+    for (int c = 0; c < 3; ++c)
+      k.add("position", l.position[c]).add("direction", l.direction[c]).add("color", l.color[c]);
+  }
+  lbl_settings().add_to(k, s, Shapes::What::Kept, "lights");
+  return k.hex();
+}
+
+std::string diffusion_key(const LblSettings& s) {
+  BakeKey k;
+  lbl_settings().add_to(k, s, Shapes::What::Kept, "diffusion");
+  return k.hex();
+}
+
+
+void check_lattice_size(const Scene& scene, const LblSettings& s, int margin, uint64_t max_alloc) {
+  Aabb box;
+  for (const Vec3& p : scene.mesh->positions) box.add(p);
+  Vec3 size = box.size();
+  double longest = std::max({size.x, size.y, size.z});
+  if (!(longest > 0)) return;
+  double nodes = 1;
+  for (int a = 0; a < 3; ++a)
+    nodes *= std::ceil(size[a] / longest * scene.voxels) + 2 * margin + s.block;
+  double bytes = 3.0 * s.directions * nodes * sizeof(float);
+  if (bytes > double(max_alloc))
+    throw ValidationError("voxels",
+                          "the lbl lattice would need " + std::to_string(long(bytes / (1 << 20))) +
+                              " MiB per state buffer, more than the device's " +
+                              std::to_string(long(max_alloc >> 20)) + " MiB: use fewer voxels" +
+                              (s.directions == 18 ? " or 6 directions" : ""));
+}
+
+
+bool uses_flux_phase(const Scene& scene, const LblSettings& s) {
+  return s.flux_phase && scene.medium.g != 0 && s.directions == 6;
+}
+
+bool uses_second(const LblSettings& s) {
+  return s.second && s.directions == 6 && s.interleave == 0;
+}
+
+Decision decide(const State* state, const Scene& scene, const RenderRequest& request,
+                const LblSettings& s) {
+  Decision d;
+  d.material = !state || state->material != material_key(scene, s);
+  d.march = d.material || state->lights != light_key(scene, s);
+  d.single = request.terms != Terms::Multiple;
+  d.multiple = request.terms != Terms::Single;
+  d.bend = scene.medium.ior != 1.0;
+  if (!d.material) {
+    const Volume& v = state->volume;
+    d.bound = second_scatter_bound(state->max_sigma_s, std::max({v.nx, v.ny, v.nz}) * v.voxel);
+    d.bend = !v.constant_n;
+  } else {
+    // Before the volume exists: the medium's coefficients at density 1 over the mesh's extent.
+    Aabb box;
+    for (const Vec3& p : scene.mesh->positions) box.add(p);
+    Vec3 size = box.size();
+    double ms = std::max({scene.medium.sigma_s.x, scene.medium.sigma_s.y, scene.medium.sigma_s.z});
+    d.bound = second_scatter_bound(ms, std::max({size.x, size.y, size.z}));
+    d.bound_note = " (estimated at density 1)";
+  }
+  d.tiny = d.bound < s.skip_multiple;
+  d.diffuse = d.multiple && !d.tiny &&
+              (d.march || !state->diffused || state->diffusion != diffusion_key(s));
+  d.gather = d.diffuse && uses_second(s) && (d.march || !state->second_current);
+  return d;
+}
+
+StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
+  std::string why;
+  if (!d.multiple)
+    why = "the single term needs no diffusion";
+  else if (d.tiny)
+    why = "a scattered photon scatters again with chance at most " + short_number(d.bound) +
+          d.bound_note + " < skip_multiple " + short_number(s.skip_multiple) +
+          ": multiple term taken as 0";
+  else if (!d.diffuse)
+    why = "camera-only change: converged irradiance kept";
+  else
+    why = std::string(s.blocked ? "blocks of " + std::to_string(s.block) + "^3, " +
+                                      std::to_string(s.inner) + " steps per launch"
+                                : "global lattice") +
+          ", " + std::to_string(s.directions) + " directions + rest, until the change is under " +
+          short_number(s.tolerance) + " (at most " + std::to_string(s.max_steps) + " steps)" +
+          (!d.material && s.warm ? ", warm start from the last state" : "") +
+          (uses_second(s) && !d.gather
+               ? "; from the light's second scattering, kept (the deposit is unchanged)"
+           : uses_second(s)
+               ? "; from the light's second scattering, gathered over " +
+                     std::to_string(kSecondDirections) +
+                     " directions through the scaled medium" +
+                     (s.escape_stride > 1 ? " at one voxel in " + std::to_string(s.escape_stride) +
+                                                " per axis as the escape correction"
+                                          : std::string(" at every voxel")) +
+                     " (the lattice carries the third and later events)"
+               : std::string());
+  return {"diffuse", d.diffuse, why};
+}
+
+Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Decision& d) {
+  Plan p{"lbl", terms, {}};
+  p.stages.push_back(
+      {"volume", d.material,
+       d.material
+           ? std::to_string(scene.voxels) + " voxels on the long side; n, grad n smoothed over " +
+                 short_number(s.smooth) + " voxels" +
+                 (s.escape && s.directions == 6
+                      ? "; escape correction over 32 directions" +
+                            (s.escape_stride > 1
+                                 ? " at one voxel in " + std::to_string(s.escape_stride) +
+                                       " per axis, log-trilinear between inside one medium" +
+                                       (s.escape_far > 0
+                                            ? ", rays at half resolution past " +
+                                                  short_number(s.escape_far) + " voxels"
+                                            : std::string())
+                                 : std::string(" at every voxel"))
+                      : "")
+           : "material unchanged: volume kept"});
+  std::string path = d.bend ? "bent by the ray equation, step " + short_number(s.step) + " voxels"
+                            : "constant n: straight rays, exact voxel crossings (no gradient)";
+  p.stages.push_back({"march", d.march,
+                      d.march ? std::to_string(scene.lights.size()) + " lights, " +
+                                    short_number(s.rays) + " rays per voxel width, " + path +
+                                    "; deposits added by CAS atomics"
+                              : "lights and material unchanged: deposit kept"});
+  p.stages.push_back(diffuse_stage(d, s));
+  if (s.measure)
+    p.stages.push_back({"bandwidth", d.diffuse,
+                        d.diffuse ? "16 more lattice steps and 16 copies of its state, timed"
+                                  : "nothing diffused in this frame"});
+  std::string gathers =
+      d.single && d.multiple ? "deposit + lattice" : (d.single ? "the deposit" : "the lattice");
+  std::string phase = scene.medium.g != 0
+                          ? "; HG phase (g " + short_number(scene.medium.g) +
+                                ") about the light's direction for the single term and the "
+                                "forward-scattered light, the lattice's (delta-Eddington "
+                                "scaled) light " +
+                                (uses_flux_phase(scene, s)
+                                     ? std::string("by the phase's first moment about its flux")
+                                     : std::string("isotropic")) +
+                                (s.scaled_view ? " and seen through the scaled medium" : "")
+                          : "";
+  p.stages.push_back(
+      {"view", true,
+       std::string(d.bend ? "eye rays refracted by grad n" : "straight eye rays (DDA)") +
+           ", gathering " + gathers + phase});
+  p.stages.push_back({"readback", true, "linear RGB to the host"});
+  return p;
+}
+
+}  // namespace scatter::lbl
