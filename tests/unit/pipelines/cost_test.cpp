@@ -212,6 +212,21 @@ TEST(CostTest, LblTracksMeasuredMemory) {
                 {sphere(64, 1, 16), request({}, Terms::Single)});
 }
 
+// lbl's second-scattering gather at every voxel (escape_stride 1, its rays on the voxels all
+// the way) was measured at 5.9-6.8x its time at the default stride 2 (docs/BENCHMARKS.md); its
+// far field alone at 1.8x; with second 0 it is not counted.
+TEST(CostTest, LblCountsTheGathersSampling) {
+  Scene s = shipped("sphere");
+  auto frame = [&](Settings settings) {
+    return estimate_cost("lbl", s, request(std::move(settings))).seconds;
+  };
+  const double base = frame({}), none = frame({{"second", 0}});
+  ASSERT_GT(base, none);
+  const double gather = base - none;
+  EXPECT_NEAR((frame({{"escape_stride", 1}}) - none) / gather, 6.3, 0.7);
+  EXPECT_NEAR((frame({{"escape_far", 0}}) - none) / gather, 1.8, 0.2);
+}
+
 TEST(CostTest, SingleTracksMeasuredMemory) {
   Settings quick{{"samples", 2000}, {"directions", 32}, {"weight_fit", 0}, {"sigma_fit", 0}};
   expect_tracks("single", {sphere(24, 1, 16), request(quick, Terms::Single)},
