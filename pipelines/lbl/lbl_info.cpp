@@ -29,21 +29,24 @@ const SettingsTable<LblSettings>& lbl_settings() {
        setting("escape_stride", &S::escape_stride, 1, 4, kept("material"),
                "the escape correction's exact part at one voxel in n per axis, log-trilinear "
                "between inside one medium, at the voxel itself next to a surface, blocker or "
-               "density step (1: at every voxel)"),
+               "density step (1: at every voxel); the second scattering's gather samples the same "
+               "way"),
        setting("escape_far", &S::escape_far, 0, 64, kept("material"),
                "with escape_stride > 1: its rays cross the voxels for this many voxel widths, "
-               "then a grid of half the resolution (0: the voxels all the way)"),
+               "then a grid of half the resolution (0: the voxels all the way); the second "
+               "scattering's gather's too"),
        flag("scaled_view", &S::scaled_view, frame(),
             "1: the view pass gathers the multiple term through the delta-Eddington scaled medium "
             "(sigma_s', sigma_t'), as the lattice carries it; 0: through the real one"),
        flag("flux_phase", &S::flux_phase, frame(),
             "1: with g != 0 the lattice's light is scattered towards the eye by 1 + 3 g m . w, m "
-            "its net flux over its total (6 directions, |m| <= 1/3); 0: isotropically"),
+            "its net flux over its total (6 directions, |m| <= 1/3; with second, the second "
+            "scattering's light by the same m, an approximation); 0: isotropically"),
        flag("second", &S::second, kept("diffusion"),
             "1: the light's second scattering computed exactly (a gather over 32 directions "
             "through the scaled medium, at escape_stride and escape_far), the lattice carrying "
-            "the third and later events; 0: the lattice from the first scattering's light (6 "
-            "directions, not with interleave)"),
+            "the third and later events (6 directions, not with interleave); 0: the lattice from "
+            "the first scattering's light"),
        setting("tolerance", &S::tolerance, 1e-6, 0.5, kept("diffusion"),
                "relative change per check that ends the diffusion"),
        setting("max_steps", &S::max_steps, 1, 1000000, kept("diffusion"),

@@ -205,8 +205,9 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   const int up = 4, down = 5;  // +z, -z
   r.R_lattice = f[(down * 3) * n + 0];
   r.T_lattice = f[(up * 3) * n + (n - 1)] + std::exp(-r.layers * dtau_r / p.mu0) - r.T_direct;
-  // As the pipeline's view pass sees the medium: the single scattering exactly, the lattice's
-  // scattered power per layer (its second and later events) emitted isotropically and leaving
+  // As the pipeline's view pass sees the medium: the single scattering exactly, the second
+  // scattering (with `second`) and the lattice's scattered power per layer (the third and later
+  // events; without `second`, the second and later) emitted isotropically and leaving
   // each face with the transport's escape probability from a uniform layer (layer_escape).
   // scaled_view with g != 0: the whole slab as the delta-Eddington scaled problem (tau (1 - a g),
   // albedo a (1 - g) / (1 - a g), isotropic), its forward peak left in the beam, which then

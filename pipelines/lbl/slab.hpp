@@ -2,11 +2,13 @@
 // reference's transport solution (pipelines/reference/slab.hpp, same parameters): a column of
 // lattice nodes across the slab, periodic sideways, open at both faces. The collimated beam's
 // scattered power per layer (Beer-Lambert along mu0, as the light march computes it) is the
-// lattice's source. R and T are read as the pipeline's view pass reads the medium: the single
-// scattering exactly (quadrature over directions, HG phase), the lattice's scattered power per
-// layer (its second and later events) emitted isotropically with the transport's escape
-// probability through each face. R_lattice and T_lattice: what the lattice itself lets out
-// through its open faces at steady state (its 6 directions, all orders), for comparison.
+// lattice's source, or with `second` (the default) the second scattering that power gives,
+// computed exactly per layer. R and T are read as the pipeline's view pass reads the medium: the
+// single scattering exactly (quadrature over directions, HG phase), the second scattering and
+// the lattice's scattered power per layer (the third and later events; without `second`, the
+// second and later) emitted isotropically with the transport's escape probability through each
+// face. R_lattice and T_lattice: what the lattice itself lets out through its open faces at
+// steady state (its 6 directions, the orders it carries), for comparison.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -30,7 +32,7 @@ struct LblSlabResult {
   double R = 0, T = 0;
   double R_diffuse = 0, R_specular = 0, T_diffuse = 0, T_direct = 0;
   double R_single = 0, T_single = 0;    // leaving after exactly one scattering (exact)
-  double R_lattice = 0, T_lattice = 0;  // the lattice's own boundary flux (diffuse, all orders)
+  double R_lattice = 0, T_lattice = 0;  // the lattice's own boundary flux (the orders it carries)
   double absorbed = 0;                  // 1 - R - T at steady state
   int layers = 0, steps = 0;
   bool converged = false;
