@@ -14,7 +14,6 @@ double second_scatter_bound(double max_sigma_s, double longest_side) {
   return -std::expm1(-max_sigma_s * longest_side);
 }
 
-
 }  // namespace
 
 std::string material_key(const Scene& scene, const LblSettings& s) {
@@ -42,7 +41,6 @@ std::string diffusion_key(const LblSettings& s) {
   return k.hex();
 }
 
-
 void check_lattice_size(const Scene& scene, const LblSettings& s, int margin, uint64_t max_alloc) {
   Aabb box;
   for (const Vec3& p : scene.mesh->positions) box.add(p);
@@ -60,7 +58,6 @@ void check_lattice_size(const Scene& scene, const LblSettings& s, int margin, ui
                               std::to_string(long(max_alloc >> 20)) + " MiB: use fewer voxels" +
                               (s.directions == 18 ? " or 6 directions" : ""));
 }
-
 
 bool uses_flux_phase(const Scene& scene, const LblSettings& s) {
   return s.flux_phase && scene.medium.g != 0 && s.directions == 6;
@@ -119,8 +116,7 @@ StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
                ? "; from the light's second scattering, kept (the deposit is unchanged)"
            : uses_second(s)
                ? "; from the light's second scattering, gathered over " +
-                     std::to_string(kSecondDirections) +
-                     " directions through the scaled medium" +
+                     std::to_string(kSecondDirections) + " directions through the scaled medium" +
                      (s.escape_stride > 1 ? " at one voxel in " + std::to_string(s.escape_stride) +
                                                 " per axis as the escape correction"
                                           : std::string(" at every voxel")) +

@@ -48,7 +48,6 @@ struct State {
   bool diffused = false, with_second = false;
 };
 
-
 // The view scatters the lattice's light with the phase's first moment about its direction
 // (setting flux_phase; the 6-direction lattice's flux only).
 bool uses_flux_phase(const Scene& scene, const LblSettings& s);
