@@ -23,4 +23,11 @@ void check_off_text(std::string_view text);
 // row, its lists' lengths read as the file's byte order says, inside the data.
 void check_ply(std::string_view bytes);
 
+// GLB (binary glTF: a 12-byte header "glTF", version, length, then chunks of a 4-byte length, a
+// 4-byte type and the data; version 1: a 20-byte header whose content length and format follow).
+// Assimp's readers allocate what a length says, plus one, before they read it (a JSON chunk of
+// 0xfffffff9 bytes asked for 4 GiB). This checks the header, and that the stated length and every
+// chunk lie inside the file.
+void check_glb(std::string_view bytes);
+
 }  // namespace scatter

@@ -331,6 +331,25 @@ TEST(Mesh, MtllibOutsideTheFileIsNotOpened) {
   EXPECT_CONTAINS(*error, "is not a regular file");
 }
 
+// A GLB whose lengths run past the file (fuzz.mesh: a JSON chunk of 0xfffffff9 bytes made
+// assimp ask for 4 GiB) is refused before assimp reads it; the corpus's cube still loads.
+TEST(MeshGlb, LengthsPastTheFileAreRejected) {
+  std::ifstream in(test::source_path("tests/fuzz/corpus/mesh/cube.glb"), std::ios::binary);
+  std::string cube((std::istreambuf_iterator<char>(in)), {});
+  ASSERT_GT(cube.size(), 21u);
+  cube.erase(0, 1);  // the fuzz corpus's format byte
+  EXPECT_EQ(load_mesh_bytes(cube, "glb", "upload").triangle_count(), 12u);
+  auto with = [&](size_t at, uint32_t x) {
+    std::string b = cube;
+    for (int i = 0; i < 4; ++i) b[at + i] = char((x >> (8 * i)) & 0xff);
+    return b;
+  };
+  EXPECT_CONTAINS(import_error(with(12, 0xfffffff9u), "glb"), "chunk 0 says 4294967289 bytes");
+  EXPECT_CONTAINS(import_error(with(8, uint32_t(cube.size() + 1)), "glb"), "the file holds");
+  EXPECT_CONTAINS(import_error(cube.substr(0, 10), "glb"), "12-byte header");
+  EXPECT_CONTAINS(import_error(with(4, 7), "glb"), "version 7");
+}
+
 // The fuzz corpus's meshes are valid files of each upload format (the first byte picks the format).
 TEST(Mesh, FuzzCorpusCubesLoadInEveryFormat) {
   const char* formats[] = {"obj", "off", "ply", "stl", "glb"};
