@@ -368,4 +368,17 @@ void check_glb(std::string_view bytes) {
   }
 }
 
+void check_stl(std::string_view bytes) {
+  if (bytes.size() < 84) return;  // too short for binary: assimp reads it as text or refuses it
+  uint32_t count = 0;
+  for (int i = 3; i >= 0; --i) count = (count << 8) | static_cast<unsigned char>(bytes[80 + i]);
+  // Assimp takes the file as binary when 84 + 50 x count, in 32 bits, equals its size.
+  const uint32_t wrapped = count * 50u + 84u;
+  const uint64_t needed = uint64_t(count) * 50 + 84;
+  if (wrapped == bytes.size() && needed != bytes.size())
+    throw std::runtime_error("STL: the binary header counts " + std::to_string(count) +
+                             " facets, " + std::to_string(needed) + " bytes; the file holds " +
+                             std::to_string(bytes.size()));
+}
+
 }  // namespace scatter

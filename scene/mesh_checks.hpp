@@ -30,4 +30,10 @@ void check_ply(std::string_view bytes);
 // chunk lie inside the file.
 void check_glb(std::string_view bytes);
 
+// STL: binary (an 80-byte header, a 32-bit facet count, 50 bytes a facet) or text ("solid ...").
+// Assimp reads a file as binary when 84 + 50 x count equals its size in 32-bit arithmetic, checks
+// the size the same way, then allocates three vertices a facet: a count of 85899346 in an 88-byte
+// file wraps to 88 and asks for 3 GiB. This rejects a count whose true size is not the file's.
+void check_stl(std::string_view bytes);
+
 }  // namespace scatter

@@ -156,14 +156,16 @@ Mesh load_mesh_bytes(std::string_view bytes, std::string_view format, const std:
   std::string ext(format);
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
-  if (ext == "off" || ext == "ply" || ext == "glb") {
+  if (ext == "off" || ext == "ply" || ext == "glb" || ext == "stl") {
     try {
       if (ext == "off")
         check_off_text(bytes);
       else if (ext == "ply")
         check_ply(bytes);
-      else
+      else if (ext == "glb")
         check_glb(bytes);
+      else
+        check_stl(bytes);
     } catch (const std::exception& e) {
       throw std::runtime_error("cannot import mesh " + name + ": " + e.what());
     }

@@ -350,6 +350,22 @@ TEST(MeshGlb, LengthsPastTheFileAreRejected) {
   EXPECT_CONTAINS(import_error(with(4, 7), "glb"), "version 7");
 }
 
+// A binary STL whose facet count, times 50 in 32 bits, wraps to the file's size: assimp would
+// take it as binary and allocate 3 vertices a facet (3 GiB) before reading past the file.
+TEST(MeshStl, ACountThatWrapsIsRejected) {
+  std::string b(88, '\0');
+  const uint32_t count = 85899346u;  // 84 + 50 x count = 2^32 + 88
+  for (int i = 0; i < 4; ++i) b[80 + i] = char((count >> (8 * i)) & 0xff);
+  EXPECT_CONTAINS(import_error(b, "stl"), "counts 85899346 facets, 4294967384 bytes");
+  std::string one(84 + 50, '\0');  // one facet, a true size: still read
+  one[80] = 1;
+  for (int v = 0; v < 3; ++v) {  // a triangle (0,0,0) (1,0,0) (0,1,0)
+    float p[3] = {v == 1 ? 1.f : 0.f, v == 2 ? 1.f : 0.f, 0.f};
+    std::memcpy(&one[84 + 12 + 12 * v], p, sizeof p);
+  }
+  EXPECT_EQ(load_mesh_bytes(one, "stl", "upload").triangle_count(), 1u);
+}
+
 // The fuzz corpus's meshes are valid files of each upload format (the first byte picks the format).
 TEST(Mesh, FuzzCorpusCubesLoadInEveryFormat) {
   const char* formats[] = {"obj", "off", "ply", "stl", "glb"};
