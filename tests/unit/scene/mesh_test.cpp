@@ -10,9 +10,13 @@
 #include <thread>
 
 #include "../test_util.hpp"
+#include "mesh_import_errors.hpp"
 
 namespace scatter {
 namespace {
+
+using test_mesh::error_within;
+using test_mesh::import_error;
 
 // The unit cube [0, 1]^3: 8 corners, 12 outward triangles.
 const double kCorners[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
@@ -186,120 +190,6 @@ TEST(Mesh, StanfordBunnyIsWatertight) {
   EXPECT_TRUE(check_watertight(m).watertight()) << check_watertight(m).summary();
 }
 
-// Runs `load` on a thread of its own and gives it `seconds`: a load that blocks (on a FIFO) or
-// loops fails the test instead of hanging the test binary (the thread is left behind).
-template <class Load>
-std::optional<std::string> error_within(Load load, double seconds, bool* timed_out) {
-  auto done = std::make_shared<std::promise<std::optional<std::string>>>();
-  auto result = done->get_future();
-  std::thread([done, load] {
-    try {
-      load();
-      done->set_value(std::nullopt);
-    } catch (const std::runtime_error& e) {
-      done->set_value(std::string(e.what()));
-    }
-  }).detach();
-  *timed_out = result.wait_for(std::chrono::duration<double>(seconds)) != std::future_status::ready;
-  return *timed_out ? std::optional<std::string>("timed out") : result.get();
-}
-
-// The error load_mesh_bytes gives for `bytes` as `format`, within 10 s; FAILs without one.
-std::string import_error(const std::string& bytes, const std::string& format) {
-  bool timed_out = false;
-  auto error =
-      error_within([bytes, format] { load_mesh_bytes(bytes, format, "upload"); }, 10, &timed_out);
-  EXPECT_FALSE(timed_out) << format << " import still running after 10 s";
-  EXPECT_TRUE(error.has_value()) << format << " import accepted a malformed file";
-  return error.value_or("");
-}
-
-#define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << (text)
-
-// The three uploads of issue 17 that killed the daemon: counts larger than the data (assimp's OFF
-// reader left faces with no indices and a post-processing assertion aborted).
-TEST(MeshOff, CountsLargerThanTheDataAreRejected) {
-  auto dir = test::scratch_dir("mesh_off_counts");
-  for (const char* text : {"OFF\n3 1 0\n0 0 0\n", "OFF\n4 2 0\n", "OFF\n100 100 0\n"}) {
-    auto path = test::write_file(dir / "lying.off", text);
-    try {
-      load_mesh(path);
-      ADD_FAILURE() << "accepted " << text;
-    } catch (const std::runtime_error& e) {
-      EXPECT_CONTAINS(std::string(e.what()), "lying.off");
-      EXPECT_CONTAINS(std::string(e.what()), "vertices, the file holds");
-    }
-  }
-  EXPECT_CONTAINS(import_error("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off"),
-                  "counts 2 faces, the file holds 1");
-}
-
-TEST(MeshOff, MalformedFilesGetAClearError) {
-  const std::string tri = "0 0 0\n1 0 0\n0 1 0\n";
-  // assimp clamps an index past the vertices to the last one; this is an error.
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "3 0 1 7\n", "off"),
-                  "names vertex \"7\"; there are 3");
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n0 nan 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off"),
-                  "\"nan\" is not a finite number");
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n1e999 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off"),
-                  "is not a finite number");
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "10 0 1 2 0 1 2 0 1 2 0\n", "off"),
-                  "3 to 9");  // assimp drops it
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "3 0 1\n", "off"), "names fewer than 3");
-  EXPECT_CONTAINS(import_error("OFF\n3 1 0\n" + tri + "3 0 1 2\n0 0 0\n", "off"),
-                  "holds more than");
-  // Counts are tokens (as assimp reads them): a missing edge count takes the first coordinate.
-  EXPECT_CONTAINS(import_error("OFF\n3 1\n" + tri + "3 0 1 2\n", "off"),
-                  "vertex 0 needs 3 numbers");
-  EXPECT_CONTAINS(import_error("OFF\n99999999999 1 0\n", "off"), "three counts");
-  EXPECT_CONTAINS(import_error("3 1 0\n" + tri + "3 0 1 2\n", "off"), "must start with OFF");
-  // A line of 4096 characters or more would overflow assimp's line buffer.
-  EXPECT_CONTAINS(
-      import_error("OFF\n3 1 0\n0 0 0" + std::string(5000, ' ') + "\n1 0 0\n0 1 0\n3 0 1 2\n",
-                   "off"),
-      "longer than 4000 characters");
-  const char with_nul[] = "OFF\n3 1 0\n0 0 0\0\n1 0 0\n0 1 0\n3 0 1 2\n";
-  EXPECT_CONTAINS(import_error(std::string(with_nul, sizeof with_nul - 1), "off"), "NUL");
-}
-
-TEST(MeshPly, MalformedFilesGetAClearError) {
-  const std::string header =
-      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-      "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
-  const std::string tri = "0 0 0\n1 0 0\n0 1 0\n";
-  // Found by fuzz_mesh: a face row that is not a number left a face with no indices and primitive
-  // types that disagreed with the faces; assimp's triangulation asserted and aborted the process.
-  EXPECT_CONTAINS(import_error(header + tri + "3 0 1 2\nz\n", "ply"),
-                  "does not match the header's properties");
-  // Found by fuzz_mesh: a header with no end_header made assimp's PLY reader loop without end.
-  EXPECT_CONTAINS(
-      import_error("ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\n1 0 0\n", "ply"),
-      "no end_header");
-  EXPECT_CONTAINS(import_error(header + tri + "3 0 1 2\n", "ply"),
-                  "element 1 has 1 rows, its header says 2");
-  EXPECT_CONTAINS(import_error(header + tri + "3 0 1 2\n3 0 1 9\n", "ply"),
-                  "is out of range");  // assimp's own validation
-  EXPECT_CONTAINS(import_error(header + "0 inf 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n", "ply"),
-                  "does not match");
-  EXPECT_CONTAINS(
-      import_error(
-          "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nnonsense\nend_header\n",
-          "ply"),
-      "not a PLY header keyword");
-  // Counts far beyond the data: refused before anything is allocated for them.
-  std::string binary =
-      "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
-      "property float y\nproperty float z\nend_header\n" +
-      std::string(36, '\0');
-  EXPECT_CONTAINS(import_error(binary, "ply"), "data ends inside row 3");
-  std::string list =
-      "ply\nformat binary_little_endian 1.0\nelement face 1\nproperty list uchar int "
-      "vertex_indices\n"
-      "end_header\n\xff" +
-      std::string(8, '\0');
-  EXPECT_CONTAINS(import_error(list, "ply"), "data ends inside row 0 of element 0");
-}
-
 TEST(Mesh, FacesNamingMissingVerticesAreRejected) {
   std::string obj = cube_obj() + "f 1 2 99\n";
   import_error(obj, "obj");
@@ -329,41 +219,6 @@ TEST(Mesh, MtllibOutsideTheFileIsNotOpened) {
   ASSERT_FALSE(timed_out);
   ASSERT_TRUE(error.has_value());
   EXPECT_CONTAINS(*error, "is not a regular file");
-}
-
-// A GLB whose lengths run past the file (fuzz.mesh: a JSON chunk of 0xfffffff9 bytes made
-// assimp ask for 4 GiB) is refused before assimp reads it; the corpus's cube still loads.
-TEST(MeshGlb, LengthsPastTheFileAreRejected) {
-  std::ifstream in(test::source_path("tests/fuzz/corpus/mesh/cube.glb"), std::ios::binary);
-  std::string cube((std::istreambuf_iterator<char>(in)), {});
-  ASSERT_GT(cube.size(), 21u);
-  cube.erase(0, 1);  // the fuzz corpus's format byte
-  EXPECT_EQ(load_mesh_bytes(cube, "glb", "upload").triangle_count(), 12u);
-  auto with = [&](size_t at, uint32_t x) {
-    std::string b = cube;
-    for (int i = 0; i < 4; ++i) b[at + i] = char((x >> (8 * i)) & 0xff);
-    return b;
-  };
-  EXPECT_CONTAINS(import_error(with(12, 0xfffffff9u), "glb"), "chunk 0 says 4294967289 bytes");
-  EXPECT_CONTAINS(import_error(with(8, uint32_t(cube.size() + 1)), "glb"), "the file holds");
-  EXPECT_CONTAINS(import_error(cube.substr(0, 10), "glb"), "12-byte header");
-  EXPECT_CONTAINS(import_error(with(4, 7), "glb"), "version 7");
-}
-
-// A binary STL whose facet count, times 50 in 32 bits, wraps to the file's size: assimp would
-// take it as binary and allocate 3 vertices a facet (3 GiB) before reading past the file.
-TEST(MeshStl, ACountThatWrapsIsRejected) {
-  std::string b(88, '\0');
-  const uint32_t count = 85899346u;  // 84 + 50 x count = 2^32 + 88
-  for (int i = 0; i < 4; ++i) b[80 + i] = char((count >> (8 * i)) & 0xff);
-  EXPECT_CONTAINS(import_error(b, "stl"), "counts 85899346 facets, 4294967384 bytes");
-  std::string one(84 + 50, '\0');  // one facet, a true size: still read
-  one[80] = 1;
-  for (int v = 0; v < 3; ++v) {  // a triangle (0,0,0) (1,0,0) (0,1,0)
-    float p[3] = {v == 1 ? 1.f : 0.f, v == 2 ? 1.f : 0.f, 0.f};
-    std::memcpy(&one[84 + 12 + 12 * v], p, sizeof p);
-  }
-  EXPECT_EQ(load_mesh_bytes(one, "stl", "upload").triangle_count(), 1u);
 }
 
 // The fuzz corpus's meshes are valid files of each upload format (the first byte picks the format).
