@@ -22,7 +22,7 @@ Server::Server(ServerOptions options)
           }(),
           queue_, metrics_, &bake_queue_,
           [this](std::function<void()> f) { boost::asio::post(workers_, std::move(f)); }),
-      acceptor_(io_),
+      acceptor_(boost::asio::make_strand(io_)),
       stop_timer_(io_) {
   boost::system::error_code ec;
   auto address = boost::asio::ip::make_address(options_.bind, ec);
@@ -96,7 +96,9 @@ void Server::stop() {
   api_.cancel_bakes();
   queue_.stop("the server is stopping");
   bake_queue_.stop("the server is stopping");
-  boost::asio::post(io_, [this] {
+  // On the acceptor's strand: its accept handler (which may be starting the next accept) runs on
+  // another I/O thread otherwise, and a close racing it freed the descriptor under that accept.
+  boost::asio::post(acceptor_.get_executor(), [this] {
     boost::system::error_code ec;
     acceptor_.close(ec);
     linger(std::chrono::steady_clock::now() + kStopGrace);

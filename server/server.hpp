@@ -54,7 +54,7 @@ class Server {
   // After the Api: destroyed before it, with the sessions its unrun handlers hold (they give
   // their slots back to the Api). ~Server has stopped every thread that posts here by then.
   boost::asio::io_context io_;
-  boost::asio::ip::tcp::acceptor acceptor_;
+  boost::asio::ip::tcp::acceptor acceptor_;  // on a strand of io_: its handlers and stop()'s close
   boost::asio::steady_timer stop_timer_;
   static constexpr std::chrono::milliseconds kStopLinger{250};
   void linger(std::chrono::steady_clock::time_point deadline);
