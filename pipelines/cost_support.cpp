@@ -86,9 +86,9 @@ double box_hull_area(const Aabb& b, const Scene& scene) {
   }
   // Monotone chain.
   std::sort(p.begin(), p.end());
-  auto cross = [](auto o, auto a, auto b) {
-    return (a.first - o.first) * (b.second - o.second) -
-           (a.second - o.second) * (b.first - o.first);
+  auto cross = [](auto o, auto a, auto c) {
+    return (a.first - o.first) * (c.second - o.second) -
+           (a.second - o.second) * (c.first - o.first);
   };
   std::vector<std::pair<double, double>> h(16);
   size_t k = 0;

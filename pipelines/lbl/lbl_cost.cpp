@@ -91,8 +91,8 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
                               : s.escape_stride == 3 ? 1.15
                                                      : 1.2;
       const double far = s.escape_stride > 1 ? s.escape_far : 0, L = side_voxels / 2;
-      auto ray_steps = [&](double f) { return f > 0 ? std::min(L, f + (L - f) / 2) : L; };
-      const double t = n * side_voxels * 60e-9 * sampling * ray_steps(far) / ray_steps(4);
+      auto gather_steps = [&](double f) { return f > 0 ? std::min(L, f + (L - f) / 2) : L; };
+      const double t = n * side_voxels * 60e-9 * sampling * gather_steps(far) / gather_steps(4);
       kept += t;
       l.time("settings.second", t,
              "the second scattering's gather over " + grid + " (escape_stride " +

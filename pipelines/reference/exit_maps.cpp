@@ -126,9 +126,9 @@ ExitMaps exit_maps(const FlatBvh& bvh, const std::vector<Light>& lights) {
         float(e2.y),     float(e2.z), float(u_lo), float(v_lo),
         float(1 / cell), float(nu),   float(nv),   std::bit_cast<float>(int32_t(maps.first.size())),
         float(l.x),      float(l.y),  float(l.z),  float(proj.point)};
-    for (const auto& l : lists) {
+    for (const auto& list : lists) {
       maps.first.push_back(int32_t(maps.triangles.size()));
-      maps.triangles.insert(maps.triangles.end(), l.begin(), l.end());
+      maps.triangles.insert(maps.triangles.end(), list.begin(), list.end());
     }
     maps.header.insert(maps.header.end(), h.begin(), h.end());
   }
