@@ -40,9 +40,10 @@ int3 sample_voxel(int s, int stride, int sx, int sy) {
   return stride * (int3)(s % sx, (s / sx) % sy, s / (sx * sy));
 }
 
-// At voxel c, the trilinear mean of log x over the samples around it (3 floats a sample, that
-// grid), exponentiated; every sample with weight must be there (pipelines/lbl/escape.cpp).
-float3 log_trilinear(__global const float* samples, int3 c, int stride, int sx, int sy) {
+// At voxel c, the trilinear mean over the samples around it (3 floats a sample, that grid) of x,
+// or with `logs` of log x; every sample with weight must be there (pipelines/lbl/escape.cpp).
+float3 sample_trilinear(__global const float* samples, int3 c, int stride, int sx, int sy,
+                        int logs) {
   int3 s0 = c / stride;
   float3 f = convert_float3(c - stride * s0) / (float)stride;
   float3 sum = (float3)(0.0f);
@@ -52,9 +53,15 @@ float3 log_trilinear(__global const float* samples, int3 c, int stride, int sx, 
     float wc = t.x * t.y * t.z;
     if (wc <= 0.0f) continue;
     int3 s = s0 + o;
-    sum += wc * log(fmax(vload3((s.z * sy + s.y) * sx + s.x, samples), 1e-30f));
+    float3 x = vload3((s.z * sy + s.y) * sx + s.x, samples);
+    sum += wc * (logs ? log(fmax(x, 1e-30f)) : x);
   }
-  return exp(sum);
+  return sum;
+}
+
+// The trilinear mean of log x over the samples around voxel c, exponentiated.
+float3 log_trilinear(__global const float* samples, int3 c, int stride, int sx, int sy) {
+  return exp(sample_trilinear(samples, c, stride, sx, sy, 1));
 }
 
 // The mean of exp(-tau) over the directions from the centre of voxel c. With far > 0 a ray

@@ -7,12 +7,14 @@
 // d_k, each weighing 4 pi / K): power per voxel, as the source is (V cancels: the source's power
 // per voxel stands for q1 V). Along each direction the voxels are crossed exactly (DDA); a voxel
 // y crossed over [a, b] adds q1(y) V exp(-tau(a)) (1 - exp(-sigma_t'(y) (b - a))) / sigma_t'(y).
-// A ray stops once all channels pass an optical depth of 8 (what it leaves out is under
+// The gather also keeps m(x), the mean direction that light travels in (its net flux over its
+// fluence, channels summed: sum_k -d_k x its light along d_k over the light): the view scatters
+// Q2 towards the eye about m (kernels/lbl/view.cl). A ray stops once all channels pass an optical depth of 8 (what it leaves out is under
 // exp(-8) of its sum). As the escape correction (kernels/lbl/escape.cl): with far > 0 a ray
 // crosses the fine voxels for `far` voxel widths and then the coarse grid (2 x 2 x 2 voxels per
 // cell, their mean sigma_t' and source); `second_samples` computes phi1 at every stride-th voxel
 // (a listed subset), `second_interpolate` fills every voxel from them or computes it there.
-// Built after kernels/lbl/escape.cl (sample_voxel, log_trilinear).
+// Built after kernels/lbl/escape.cl (sample_voxel, sample_trilinear, log_trilinear).
 
 // Adds to *sum the source's light along o + t d over [t0, t1] through `grid`, and to *tau the
 // optical depth crossed.
@@ -35,22 +37,27 @@ void second_along(const Grid* grid, __global const float* sigma_t, __global cons
   }
 }
 
-// phi1 V at the centre of voxel c: the mean over the directions of the light arriving there.
+// phi1 V at the centre of voxel c: the mean over the directions of the light arriving there;
+// *m the mean direction that light travels in (its channels summed), |m| <= 1.
 float3 second_at(const Grid* g, int3 c, __global const float* sigma_t,
                  __global const float* source, const Grid* cg, __global const float* coarse_t,
                  __global const float* coarse_source, float far, __global const float* dirs,
-                 int count) {
+                 int count, float3* m) {
   float3 o = g->origin + g->voxel * (convert_float3(c) + 0.5f);
-  float3 sum = (float3)(0.0f);
+  float3 sum = (float3)(0.0f), flux = (float3)(0.0f);
   for (int k = 0; k < count; ++k) {
     float3 d = (float3)(dirs[3 * k], dirs[3 * k + 1], dirs[3 * k + 2]);
     float t0, t1;
     if (!grid_interval(g, o, d, &t0, &t1)) continue;
-    float3 tau = (float3)(0.0f);
+    float3 tau = (float3)(0.0f), along = (float3)(0.0f);
     float tf = far > 0.0f ? fmin(t1, t0 + far * g->voxel) : t1;
-    second_along(g, sigma_t, source, o, d, t0, tf, &tau, &sum);
-    if (tf < t1) second_along(cg, coarse_t, coarse_source, o, d, tf, t1, &tau, &sum);
+    second_along(g, sigma_t, source, o, d, t0, tf, &tau, &along);
+    if (tf < t1) second_along(cg, coarse_t, coarse_source, o, d, tf, t1, &tau, &along);
+    sum += along;
+    flux -= d * (along.x + along.y + along.z);  // the light from o + s d travels along -d
   }
+  float total = sum.x + sum.y + sum.z;
+  *m = total > 0.0f ? flux / total : (float3)(0.0f);
   return sum / (float)count;
 }
 
@@ -76,15 +83,17 @@ __kernel void second_samples(float3 origin, float voxel, int nx, int ny, int nz,
                              __global const float* coarse_t, __global const float* coarse_source,
                              float far, __global const float* dirs, int count, int stride,
                              int sx, int sy, __global const int* list, int listed,
-                             __global float* samples) {
+                             __global float* samples, __global float* msamples) {
   int id = get_global_id(0);
   if (id >= listed) return;
   int s = list[id];
   int3 c = sample_voxel(s, stride, sx, sy);
   Grid g = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
   Grid cg = half_grid(&g);
-  vstore3(second_at(&g, c, sigma_t, source, &cg, coarse_t, coarse_source, far, dirs, count), s,
+  float3 m;
+  vstore3(second_at(&g, c, sigma_t, source, &cg, coarse_t, coarse_source, far, dirs, count, &m), s,
           samples);
+  vstore3(m, s, msamples);
 }
 
 // Q2 = sigma_s' phi1 V at every voxel by its mode (pipelines/lbl/escape.cpp's sampling): 0 does
@@ -96,26 +105,20 @@ __kernel void second_interpolate(float3 origin, float voxel, int nx, int ny, int
                                  __global const float* coarse_source, float far,
                                  __global const char* mode, __global const float* dirs, int count,
                                  int stride, int sx, int sy, __global const float* samples,
-                                 __global const float* sigma_s, float g,
-                                 __global float* out) {
+                                 __global const float* msamples, __global const float* sigma_s,
+                                 float g, __global float* out, __global float* mout) {
   int3 c = (int3)(get_global_id(0), get_global_id(1), get_global_id(2));
   if (c.x >= nx || c.y >= ny || c.z >= nz) return;
   Grid grid = make_grid(origin, voxel, nx, ny, nz, 1, 0, 0, 0);
   int i = voxel_index(&grid, c.x, c.y, c.z);
-  float3 phi = (float3)(0.0f);
+  float3 phi = (float3)(0.0f), m = (float3)(0.0f);
   if (mode[i] == 2) {
     Grid cg = half_grid(&grid);
-    phi = second_at(&grid, c, sigma_t, source, &cg, coarse_t, coarse_source, far, dirs, count);
+    phi = second_at(&grid, c, sigma_t, source, &cg, coarse_t, coarse_source, far, dirs, count, &m);
   } else if (mode[i] == 1) {
     phi = log_trilinear(samples, c, stride, sx, sy);
+    m = sample_trilinear(msamples, c, stride, sx, sy, 0);
   }
   vstore3((1.0f - g) * vload3(i, sigma_s) * phi, i, out);
-}
-
-// emission = irr + scale x second: the multiple term's emission when the lattice carries the third
-// and later events (irr, in the lattice's units: the real sigma_s's share, so scale = 1 / (1 - g)).
-__kernel void add_scaled(__global const float* irr, __global const float* second, float scale,
-                         __global float* emission) {
-  size_t i = get_global_id(0);
-  emission[i] = irr[i] + scale * second[i];
+  vstore3(m, i, mout);
 }

@@ -8,7 +8,11 @@
 // m = flow / (deposit summed over channels), |m| <= 1 (1 for one straight light); its
 // distribution taken as HG(|m|) about m, and HG(g) * HG(|m|) = HG(g |m|) (their Legendre
 // coefficients multiply), so the deposit is weighted by 4 pi HG(g |m|, m . w_out) with w_out the
-// way to the eye. The multiple term's emission stays isotropic.
+// way to the eye. The multiple term's emission: the lattice's light isotropic (or g_flux, below);
+// with second the second scattering's light, which the gather found travelling about its mean
+// direction m (|m| <= 1, kernels/lbl/second.cl), by the same model: 4 pi HG(g |m|, m . w_out)
+// (g_second = g; 0: isotropic). Next to a surface m points out of the medium, so the eye sees
+// more of that light face on and less at grazing angles than an isotropic emission gives.
 // scaled_view (g_scale = g): the multiple term, the lattice's delta-Eddington scaled light, is
 // gathered as that scaled medium emits and attenuates it: (1 - g) x the irradiance (sigma_s'
 // for sigma_s) through sigma_t' = sigma_t - g sigma_s.
@@ -61,13 +65,26 @@ void gather_piece(__global const float* sigma_t, __global const float* sigma_s, 
 // is isotropic unless g_flux != 0: with its direction m = J / phi per voxel (lattice_flux), a
 // radiance (phi + 3 J . w) / (4 pi) scattered by a phase of first moment g emits
 // (phi + 3 g J . w_out) / (4 pi), so the emission is scaled by 1 + 3 g m . w_out (not below 0).
+// With second (second_scale = 1 / (1 - g), else 0) the second scattering's light Q2 / (1 - g)
+// is added, by the phase about the gather's direction (g_second != 0) or else with the lattice's.
 float3 multiple_emission(__global const float* deposit, __global const float* irr,
                          __global const float* flow, float w_multiple, float g, int with_flow,
-                         __global const float* lflux, float g_flux, int voxels, int v,
-                         float3 to_eye) {
+                         __global const float* lflux, float g_flux, __global const float* second,
+                         __global const float* second_dir, float second_scale, float g_second,
+                         int voxels, int v, float3 to_eye) {
   float3 e = (float3)(irr[v], irr[v + 1], irr[v + 2]);
-  if (g_flux != 0.0f)
-    e *= fmax(0.0f, 1.0f + 3.0f * g_flux * dot(vload3(v / 3, lflux), to_eye));
+  float3 q = second_scale * (float3)(second[v], second[v + 1], second[v + 2]);
+  if (g_second != 0.0f) {
+    float3 m = vload3(v / 3, second_dir);
+    float len = length(m);
+    if (len > 1e-6f) q *= 4.0f * PI * hg_phase(dot(m, to_eye) / len, g_second * fmin(len, 1.0f));
+  }
+  if (g_flux != 0.0f) {  // (the second scattering's light too when it has no phase of its own)
+    float f = fmax(0.0f, 1.0f + 3.0f * g_flux * dot(vload3(v / 3, lflux), to_eye));
+    e *= f;
+    if (g_second == 0.0f) q *= f;
+  }
+  e += q;
   if (with_flow && w_multiple != 0.0f) {
     __global const float* extra = flow + 3 * voxels;
     e += single_phase(deposit, flow, g, v, to_eye) * (float3)(extra[v], extra[v + 1], extra[v + 2]);
@@ -81,7 +98,9 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
                         __global const float* irr, float w_single, float w_multiple,
                         __global const float* flow, float g_phase, int with_flow,
                         __global const float* sigma_s, float g_scale, __global const float* lflux,
-                        float g_flux, __global const float* camera, int width, int height, int bend,
+                        float g_flux, __global const float* second,
+                        __global const float* second_dir, float second_scale, float g_second,
+                        __global const float* camera, int width, int height, int bend,
                         float delta, __global float* out) {
   int px = get_global_id(0), py = get_global_id(1);
   if (px >= width || py >= height) return;
@@ -103,7 +122,8 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
         gather_piece(sigma_t, sigma_s, g_scale,
                      single_emission(deposit, flow, w_single, g_phase, with_flow, v, -d),
                      multiple_emission(deposit, irr, flow, w_multiple, g_phase, with_flow, lflux,
-                                       g_flux, nx * ny * nz, v, -d),
+                                       g_flux, second, second_dir, second_scale, g_second,
+                                       nx * ny * nz, v, -d),
                      v, b - a, inv_4pi_v, &tr, &trm, &radiance);
       }
     } else {
@@ -123,7 +143,8 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
         float3 e = single_emission(deposit, flow, w_single, g_phase, with_flow, k,
                                    normalize(x0 - x));
         float3 em = multiple_emission(deposit, irr, flow, w_multiple, g_phase, with_flow, lflux,
-                                      g_flux, nx * ny * nz, k, normalize(x0 - x));
+                                      g_flux, second, second_dir, second_scale, g_second,
+                                      nx * ny * nz, k, normalize(x0 - x));
         gather_piece(sigma_t, sigma_s, g_scale, e, em, k, ds, inv_4pi_v, &tr, &trm, &radiance);
       }
     }

@@ -29,14 +29,14 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
   //   floats, iface_ (blocked) 2 x 72 / block B; deposit 12 B and (g != 0) source 12 B, flow
   //   24 B and (flux_phase, 6 directions) the lattice's flux 12 B; the second scattering's
   //   gather (second.cpp, 6 directions, not interleaved) sigma_t' 12 B, its half-resolution grid
-  //   and source 3 B, the sampling's mode 1 B, samples and list 2 B, second and emission 24 B
-  //   (host: sigma_t' and the sampling, 13 B).
+  //   and source 3 B, the sampling's mode 1 B, samples, their directions and list 3.5 B, second and
+  //   its direction 24 B (host: sigma_t' and the sampling, 13 B).
   // Measured RSS: 72^3 346 MB, 104^3 628 MB (estimates 370, 671 with ~220 MB of contexts).
   const bool second = s.second && d == 6 && s.interleave == 0 && request.terms != Terms::Single;
   double host = kGridBytes + 44 + 72 + (second ? 13 : 0);
   double device =
       40 + 36 * (d == 18 ? 2 : 1) + 24 + 2 * 12 * d + (s.blocked ? 144.0 / s.block : 0) + 12 +
-      (scene.medium.g != 0 ? 12 + 24 + (d == 6 && s.flux_phase ? 12 : 0) : 0) + (second ? 42 : 0);
+      (scene.medium.g != 0 ? 12 + 24 + (d == 6 && s.flux_phase ? 12 : 0) : 0) + (second ? 43.5 : 0);
   l.host("scene.voxels", n * host,
          grid + " x " + short_number(host) + " B (grid, volume, coefficients)");
   l.device("scene.voxels", n * device,

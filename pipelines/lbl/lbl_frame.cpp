@@ -161,8 +161,12 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
   std::string phase = scene.medium.g != 0
                           ? "; HG phase (g " + short_number(scene.medium.g) +
                                 ") about the light's direction for the single term and the "
-                                "forward-scattered light, the lattice's (delta-Eddington "
-                                "scaled) light " +
+                                "forward-scattered light" +
+                                (uses_second(s) && s.second_phase
+                                     ? std::string(", about the gather's mean direction for the "
+                                                   "second scattering's light")
+                                     : std::string()) +
+                                ", the lattice's (delta-Eddington scaled) light " +
                                 (uses_flux_phase(scene, s)
                                      ? std::string("by the phase's first moment about its flux")
                                      : std::string("isotropic")) +

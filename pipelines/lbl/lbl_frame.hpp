@@ -39,11 +39,11 @@ struct State {
   bool flux_current = false;  // lattice_flux is the last diffusion's
   std::unique_ptr<SecondScatter> gather;  // setting second: its gather, made when first used
   cl::Buffer second;            // setting second: the light's second scattering (3 per voxel)
-  bool second_current = false;  // second is the gather of the loaded deposit
-  cl::Buffer emission;          // then the multiple term's emission, irr + second / (1 - g)
+  cl::Buffer second_dir;        // and the mean direction its light travels in (3 per voxel)
+  bool second_current = false;  // second and second_dir are the gather of the loaded deposit
   double max_sigma_s = 0;
   // The lattice has converged for the loaded deposit and settings; with_second: from the second
-  // scattering (it carried the third and later events, emission holds the view's emission). Both
+  // scattering (it carried the third and later events; the view adds second's light). Both
   // are cleared when a diffusion starts and set when it finishes: a cancelled one leaves neither.
   bool diffused = false, with_second = false;
 };

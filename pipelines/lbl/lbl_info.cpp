@@ -38,15 +38,20 @@ const SettingsTable<LblSettings>& lbl_settings() {
        flag("scaled_view", &S::scaled_view, frame(),
             "1: the view pass gathers the multiple term through the delta-Eddington scaled medium "
             "(sigma_s', sigma_t'), as the lattice carries it; 0: through the real one"),
-       flag("flux_phase", &S::flux_phase, frame(),
-            "1: with g != 0 the lattice's light is scattered towards the eye by 1 + 3 g m . w, m "
-            "its net flux over its total (6 directions, |m| <= 1/3; with second, the second "
-            "scattering's light by the same m, an approximation); 0: isotropically"),
+       flag(
+           "flux_phase", &S::flux_phase, frame(),
+           "1: with g != 0 the lattice's light is scattered towards the eye by 1 + 3 g m . w, m "
+           "its net flux over its total (6 directions, |m| <= 1/3; with second and second_phase 0, "
+           "the second scattering's light by the same m, an approximation); 0: isotropically"),
        flag("second", &S::second, kept("diffusion"),
             "1: the light's second scattering computed exactly (a gather over 32 directions "
             "through the scaled medium, at escape_stride and escape_far), the lattice carrying "
             "the third and later events (6 directions, not with interleave); 0: the lattice from "
             "the first scattering's light"),
+       flag("second_phase", &S::second_phase, frame(),
+            "with second and g != 0, 1: the second scattering's light is scattered towards the "
+            "eye by HG(g |m|) about m, the mean direction the gather found it arriving in (the "
+            "single term's model); 0: isotropically"),
        setting("tolerance", &S::tolerance, 1e-6, 0.5, kept("diffusion"),
                "relative change per check that ends the diffusion"),
        setting("max_steps", &S::max_steps, 1, 1000000, kept("diffusion"),

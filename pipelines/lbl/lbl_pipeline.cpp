@@ -138,13 +138,13 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
         st.gather = std::make_unique<lbl::SecondScatter>(cl, st.volume, st.device, scene.medium.g,
                                                          s.escape_stride, s.escape_far);
         st.second = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, bytes);
-        st.emission = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, bytes);
+        st.second_dir = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, bytes);
       }
       st.second_current = false;
       // The gather reports the first half of the progress, the lattice's steps the second.
       std::function<void(double)> progress;
       if (request.progress) progress = [&](double f) { request.progress(0.5 * f); };
-      st.gather->run(st.source, st.second, progress);
+      st.gather->run(st.source, st.second, st.second_dir, progress);
       queue.finish();
       st.second_current = true;
       clock.stop("second");
@@ -154,9 +154,6 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     if (with_second && request.progress)
       progress = [&](double f) { request.progress(0.5 + 0.5 * f); };
     lbl::Convergence c = st.lattice->converge(s.tolerance, s.max_steps, s.check_every, progress);
-    if (with_second)
-      lbl::add_second(cl, st.lattice->irradiance_buffer(), st.second, scene.medium.g,
-                      st.volume.count(), st.emission);
     queue.finish();
     st.diffused = true;
     st.with_second = with_second;
@@ -195,12 +192,15 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     st.flux_current = true;
   }
   const lbl::ClVolume& v = st.device;
-  gpu::set_args(k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_t, v.n, v.grad, st.deposit,
-                st.with_second ? st.emission : st.lattice->irradiance_buffer(), w_single,
-                w_multiple, st.flow, float(scene.medium.g), scene.medium.g != 0 ? 1 : 0, v.sigma_s,
-                float(s.scaled_view ? scene.medium.g : 0.0),
-                flux_phase ? st.lattice_flux : st.deposit, float(flux_phase ? scene.medium.g : 0.0),
-                camera, w, h, d.bend ? 1 : 0, float(s.step * st.volume.voxel), out);
+  gpu::set_args(
+      k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_t, v.n, v.grad, st.deposit,
+      st.lattice->irradiance_buffer(), w_single, w_multiple, st.flow, float(scene.medium.g),
+      scene.medium.g != 0 ? 1 : 0, v.sigma_s, float(s.scaled_view ? scene.medium.g : 0.0),
+      flux_phase ? st.lattice_flux : st.deposit, float(flux_phase ? scene.medium.g : 0.0),
+      st.with_second ? st.second : st.deposit, st.with_second ? st.second_dir : st.deposit,
+      float(st.with_second ? 1 / (1 - scene.medium.g) : 0.0),
+      float(st.with_second && s.second_phase ? scene.medium.g : 0.0), camera, w, h, d.bend ? 1 : 0,
+      float(s.step * st.volume.voxel), out);
   queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
   queue.finish();
   clock.stop("view");

@@ -51,11 +51,12 @@ SecondScatter::SecondScatter(gpu::ClContext& cl, const Volume& v, const ClVolume
                                   e.samples.data());
   mode_ = cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, e.mode.size(),
                      e.mode.data());
-  samples_ = cl::Buffer(cl.context(), CL_MEM_READ_WRITE,
-                        std::max<size_t>(1, 3 * size_t(n_[0]) * n_[1] * n_[2]) * sizeof(float));
+  const size_t sample_floats = std::max<size_t>(1, 3 * size_t(n_[0]) * n_[1] * n_[2]);
+  samples_ = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, sample_floats * sizeof(float));
+  msamples_ = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, sample_floats * sizeof(float));
 }
 
-void SecondScatter::run(const cl::Buffer& source, cl::Buffer& out,
+void SecondScatter::run(const cl::Buffer& source, cl::Buffer& out, cl::Buffer& direction,
                         const std::function<void(double)>& progress) {
   cl::Program& program = second_program(cl_);
   auto& queue = cl_.queue();
@@ -81,7 +82,7 @@ void SecondScatter::run(const cl::Buffer& source, cl::Buffer& out,
     cl::Kernel k(program, "second_samples");
     gpu::set_args(k, v_.origin, v_.voxel, v_.nx, v_.ny, v_.nz, sigma_t_, source, coarse_t_,
                   coarse_source_, float(far_), dirs_, directions_, stride_, n_[0], n_[1], list_,
-                  cl_int(samples_count_), samples_);
+                  cl_int(samples_count_), samples_, msamples_);
     for (size_t first = 0; first < samples_count_; first += kSecondChunk) {
       queue.enqueueNDRangeKernel(k, cl::NDRange(first),
                                  cl::NDRange(std::min(kSecondChunk, samples_count_ - first)));
@@ -91,19 +92,12 @@ void SecondScatter::run(const cl::Buffer& source, cl::Buffer& out,
   cl::Kernel k(program, "second_interpolate");
   gpu::set_args(k, v_.origin, v_.voxel, v_.nx, v_.ny, v_.nz, sigma_t_, source, coarse_t_,
                 coarse_source_, float(far_), mode_, dirs_, directions_, stride_, n_[0], n_[1],
-                samples_, v_.sigma_s, float(g_), out);
+                samples_, msamples_, v_.sigma_s, float(g_), out, direction);
   for (int z = 0; z < v_.nz; z += slab) {
     queue.enqueueNDRangeKernel(k, cl::NDRange(0, 0, z),
                                cl::NDRange(v_.nx, v_.ny, std::min(slab, v_.nz - z)));
     launched();
   }
-}
-
-void add_second(gpu::ClContext& cl, const cl::Buffer& irr, const cl::Buffer& second, double g,
-                size_t voxels, cl::Buffer& emission) {
-  cl::Kernel k(second_program(cl), "add_scaled");
-  gpu::set_args(k, irr, second, float(1 / (1 - g)), emission);
-  cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(3 * voxels));
 }
 
 }  // namespace scatter::lbl

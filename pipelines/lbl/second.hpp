@@ -31,12 +31,14 @@ class SecondScatter {
   SecondScatter(gpu::ClContext& cl, const Volume& v, const ClVolume& device, double g,
                 int stride = 1, double far = 0, int directions = kSecondDirections);
   // Q2 per voxel and channel into `out` (3 floats per voxel, the source's units: power per voxel
-  // per lattice step): sigma_s' V times the fluence of the light `source` emits isotropically.
+  // per lattice step): sigma_s' V times the fluence of the light `source` emits isotropically;
+  // into `direction` (3 floats per voxel) that light's mean direction of travel m (its net flux
+  // over its fluence, channels summed, |m| <= 1; 0 where none arrives).
   // The gathers run in launches of about kSecondChunk voxels; with `progress`, each launch is
   // waited for and progress(f) called after it, f the fraction of launches done (it may throw to
   // stop: a cancelled render).
   // Otherwise enqueued, not waited for.
-  void run(const cl::Buffer& source, cl::Buffer& out,
+  void run(const cl::Buffer& source, cl::Buffer& out, cl::Buffer& direction,
            const std::function<void(double)>& progress = {});
   // The voxels whose gather runs (samples and voxels computed themselves).
   size_t gathers() const { return gathers_; }
@@ -48,12 +50,7 @@ class SecondScatter {
   int stride_, directions_;
   std::array<int, 3> n_{};
   size_t samples_count_ = 0, gathers_ = 0, count_ = 0, coarse_count_ = 0;
-  cl::Buffer sigma_t_, coarse_t_, coarse_source_, dirs_, list_, mode_, samples_;
+  cl::Buffer sigma_t_, coarse_t_, coarse_source_, dirs_, list_, mode_, samples_, msamples_;
 };
-
-// emission = irr + second / (1 - g) (3 x `voxels` floats): the view's multiple-term emission in
-// the lattice irradiance's units (the real sigma_s's share of the scaled medium's scattering).
-void add_second(gpu::ClContext& cl, const cl::Buffer& irr, const cl::Buffer& second, double g,
-                size_t voxels, cl::Buffer& emission);
 
 }  // namespace scatter::lbl
