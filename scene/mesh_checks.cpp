@@ -333,41 +333,6 @@ void check_ply(std::string_view bytes) {
     check_ply_binary(body, elements, format == "binary_big_endian");
 }
 
-void check_glb(std::string_view bytes) {
-  auto u32 = [&](size_t at) {
-    uint32_t x = 0;
-    for (int i = 3; i >= 0; --i) x = (x << 8) | static_cast<unsigned char>(bytes[at + i]);
-    return x;
-  };
-  if (bytes.size() < 12) throw std::runtime_error("GLB: shorter than its 12-byte header");
-  if (bytes.substr(0, 4) != "glTF") throw std::runtime_error("GLB: the file must start with glTF");
-  const uint32_t version = u32(4), length = u32(8);
-  if (length > bytes.size())
-    throw std::runtime_error("GLB: the header says " + std::to_string(length) +
-                             " bytes, the file holds " + std::to_string(bytes.size()));
-  if (version == 1) {
-    if (length < 20) throw std::runtime_error("GLB: shorter than its 20-byte version 1 header");
-    if (u32(12) > length - 20)
-      throw std::runtime_error("GLB: the content's length " + std::to_string(u32(12)) +
-                               " runs past the file's " + std::to_string(length) + " bytes");
-    return;
-  }
-  if (version != 2)
-    throw std::runtime_error("GLB: version " + std::to_string(version) + " (1 and 2 are read)");
-  int index = 0;
-  for (size_t at = 12; at < length; ++index) {
-    if (length - at < 8)
-      throw std::runtime_error("GLB: chunk " + std::to_string(index) + "'s header runs past the " +
-                               std::to_string(length) + " bytes");
-    const uint32_t chunk = u32(at);
-    if (chunk > length - at - 8)
-      throw std::runtime_error("GLB: chunk " + std::to_string(index) + " says " +
-                               std::to_string(chunk) + " bytes, " +
-                               std::to_string(length - at - 8) + " follow it");
-    at += 8 + size_t(chunk);
-  }
-}
-
 void check_stl(std::string_view bytes) {
   if (bytes.size() < 84) return;  // too short for binary: assimp reads it as text or refuses it
   uint32_t count = 0;

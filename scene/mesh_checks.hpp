@@ -23,17 +23,25 @@ void check_off_text(std::string_view text);
 // row, its lists' lengths read as the file's byte order says, inside the data.
 void check_ply(std::string_view bytes);
 
-// GLB (binary glTF: a 12-byte header "glTF", version, length, then chunks of a 4-byte length, a
-// 4-byte type and the data; version 1: a 20-byte header whose content length and format follow).
-// Assimp's readers allocate what a length says, plus one, before they read it (a JSON chunk of
-// 0xfffffff9 bytes asked for 4 GiB). This checks the header, and that the stated length and every
-// chunk lie inside the file.
+// GLB (binary glTF 2.0: a 12-byte header "glTF", version, length, then chunks of a 4-byte length,
+// a 4-byte type and the data: the JSON, then the binary buffer) (scene/glb_checks.cpp). Assimp's
+// readers allocate what a length says, plus one, before they read it (a JSON chunk of 0xfffffff9
+// bytes asked for 4 GiB); its glTF 1.0 reader reads accessors and buffer views unchecked (an
+// assertion aborts the process); its glTF 2.0 reader takes a sparse accessor without a buffer view
+// as count x element size bytes of zeros (4 GiB for a 544-byte file) and one without indices as a
+// null pointer, and parses the JSON recursively. This takes version 2 only and checks the header,
+// that every chunk lies inside the file on 4-byte boundaries, and then the JSON: nested at most
+// kMaxGlbDepth deep; every buffer inside the binary chunk or its data URI, every buffer view
+// inside its buffer, every accessor dense and inside its view, every index that names one of them
+// in range.
 void check_glb(std::string_view bytes);
 
 // STL: binary (an 80-byte header, a 32-bit facet count, 50 bytes a facet) or text ("solid ...").
-// Assimp reads a file as binary when 84 + 50 x count equals its size in 32-bit arithmetic, checks
-// the size the same way, then allocates three vertices a facet: a count of 85899346 in an 88-byte
-// file wraps to 88 and asks for 3 GiB. This rejects a count whose true size is not the file's.
+// Assimp takes a file as binary when 84 + 50 x count equals its size in 32-bit arithmetic, so a
+// count of 85899346 in an 88-byte file (2^32 + 88) is read as binary; Debian's assimp 5.2.5 then
+// checks the size in 64 bits and refuses it ("file is too small to hold all facets"), but a
+// reader that checked it the 32-bit way would allocate 3 vertices a facet (3 GiB). This rejects
+// a count whose true size is not the file's, naming both, whatever the assimp.
 void check_stl(std::string_view bytes);
 
 }  // namespace scatter

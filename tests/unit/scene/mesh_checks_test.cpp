@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "../test_util.hpp"
@@ -114,6 +115,82 @@ TEST(MeshGlb, LengthsPastTheFileAreRejected) {
   EXPECT_CONTAINS(import_error(with(8, uint32_t(cube.size() + 1)), "glb"), "the file holds");
   EXPECT_CONTAINS(import_error(cube.substr(0, 10), "glb"), "12-byte header");
   EXPECT_CONTAINS(import_error(with(4, 7), "glb"), "version 7");
+}
+
+// A GLB's JSON against its buffers (a review found these with libassimp alone: a version 1 file
+// whose accessor overran its view aborted on an assertion, a sparse accessor without indices
+// dereferenced null, one without a buffer view allocated count x its size, gigabytes for 544
+// bytes): each refused naming what is wrong, before assimp reads it.
+TEST(MeshGlb, WhatTheJsonSaysIsCheckedAgainstTheBuffers) {
+  std::ifstream in(test::source_path("tests/fuzz/corpus/mesh/cube.glb"), std::ios::binary);
+  std::string cube((std::istreambuf_iterator<char>(in)), {});
+  cube.erase(0, 1);  // the fuzz corpus's format byte
+  auto u32 = [](std::string& b, size_t at, uint32_t x) {
+    for (int i = 0; i < 4; ++i) b[at + i] = char((x >> (8 * i)) & 0xff);
+  };
+  auto le32 = [&](size_t at) {
+    uint32_t x = 0;
+    for (int i = 3; i >= 0; --i) x = (x << 8) | static_cast<unsigned char>(cube[at + i]);
+    return x;
+  };
+  const uint32_t json_bytes = le32(12);
+  const nlohmann::json doc = nlohmann::json::parse(cube.substr(20, json_bytes));
+  const std::string bin = cube.substr(20 + json_bytes);  // its chunk header and data
+  auto glb = [&](const std::string& json, uint32_t version = 2) {
+    std::string text = json;
+    while (text.size() % 4) text += ' ';
+    std::string b(20, '\0');
+    b.replace(0, 4, "glTF");
+    u32(b, 4, version);
+    u32(b, 12, uint32_t(text.size()));
+    u32(b, 16, 0x4E4F534A);
+    b += text + bin;
+    u32(b, 8, uint32_t(b.size()));
+    return b;
+  };
+  auto edited = [&](auto change) {
+    nlohmann::json d = doc;
+    change(d);
+    return glb(d.dump());
+  };
+  EXPECT_EQ(load_mesh_bytes(glb(doc.dump()), "glb", "upload").triangle_count(), 12u);
+  EXPECT_CONTAINS(import_error(glb(doc.dump(), 1), "glb"), "version 1 (only glTF 2.0");
+  EXPECT_CONTAINS(import_error(edited([](auto& d) {
+                                 d["accessors"][0]["sparse"] = {{"count", 1}};
+                               }),
+                               "glb"),
+                  "accessor 0 is sparse");
+  EXPECT_CONTAINS(
+      import_error(edited([](auto& d) { d["accessors"][1].erase("bufferView"); }), "glb"),
+      "accessor 1 has no bufferView");
+  EXPECT_CONTAINS(
+      import_error(edited([](auto& d) { d["accessors"][0]["count"] = 100000000; }), "glb"),
+      "accessor 0's count is 100000000, more than");
+  EXPECT_CONTAINS(import_error(edited([](auto& d) { d["accessors"][0]["count"] = 9; }), "glb"),
+                  "accessor 0 (9 elements of 12 bytes, 12 apart, from 0) runs past bufferView "
+                  "0's 96 bytes");
+  EXPECT_CONTAINS(
+      import_error(edited([](auto& d) { d["bufferViews"][1]["byteLength"] = 73; }), "glb"),
+      "bufferView 1 (96 + 73 bytes) runs past buffer 0's 168");
+  EXPECT_CONTAINS(import_error(edited([](auto& d) { d["buffers"][0]["byteLength"] = 400; }), "glb"),
+                  "buffer 0 says 400 bytes, its data holds 168");
+  EXPECT_CONTAINS(import_error(edited([](auto& d) {
+                                 d["bufferViews"][0]["byteOffset"] = 18446744073709551000ull;
+                               }),
+                               "glb"),
+                  "bufferView 0's byteOffset is 18446744073709551000, more than");
+  EXPECT_CONTAINS(
+      import_error(edited([](auto& d) { d["meshes"][0]["primitives"][0]["indices"] = 5; }), "glb"),
+      "names indices of no accessor");
+  EXPECT_CONTAINS(import_error(edited([](auto& d) {
+                                 d["extras"] = nlohmann::json::parse(std::string(100, '[') +
+                                                                     std::string(100, ']'));
+                               }),
+                               "glb"),
+                  "nests more than 64 deep");
+  std::string odd = glb(doc.dump());
+  u32(odd, 12, le32(12) - 1);  // the JSON's length no longer a multiple of 4
+  EXPECT_CONTAINS(import_error(odd, "glb"), "not a multiple of 4");
 }
 
 // A binary STL whose facet count, times 50 in 32 bits, wraps to the file's size: assimp would
