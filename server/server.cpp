@@ -61,9 +61,8 @@ void Server::do_accept() {
   acceptor_.async_accept(boost::asio::make_strand(io_), [this](boost::system::error_code ec,
                                                                tcp::socket socket) {
     if (ec) {
-      if (ec != boost::asio::error::operation_aborted)
+      if (ec != boost::asio::error::operation_aborted && acceptor_.is_open())
         spdlog::warn("event=accept_error error=\"{}\"", ec.message());
-      if (!acceptor_.is_open()) return;
     } else {
       // A frame is a header then an image: without this, Nagle's algorithm holds the image
       // until the client acknowledges the header (its delayed ack: ~40 ms a frame).
@@ -71,7 +70,8 @@ void Server::do_accept() {
       std::make_shared<HttpSession>(std::move(socket), api_, workers_, options_.max_upload_mb << 20)
           ->run();
     }
-    do_accept();
+    // Closed by stop() (on this strand): no next accept, which would fail on the closed socket.
+    if (acceptor_.is_open()) do_accept();
   });
 }
 
@@ -91,6 +91,7 @@ void Server::run(bool handle_signals) {
 }
 
 void Server::stop() {
+  if (stopping_.exchange(true)) return;  // once: a second linger would cancel the first's timer
   // Cancelled now, not behind the I/O: queued work is dropped and the running job stops at its
   // next check.
   api_.cancel_bakes();

@@ -4,6 +4,7 @@
 // worker pool parses requests and encodes images. No thread waits on another's result.
 #pragma once
 
+#include <atomic>
 #include <boost/asio.hpp>
 #include <memory>
 #include <thread>
@@ -56,6 +57,7 @@ class Server {
   boost::asio::io_context io_;
   boost::asio::ip::tcp::acceptor acceptor_;  // on a strand of io_: its handlers and stop()'s close
   boost::asio::steady_timer stop_timer_;
+  std::atomic<bool> stopping_{false};  // stop() has run
   static constexpr std::chrono::milliseconds kStopLinger{250};
   void linger(std::chrono::steady_clock::time_point deadline);
   unsigned short port_ = 0;

@@ -105,6 +105,10 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
     cl::Buffer ray_buf = upload(cl, rays.rays);
     const bool with_flow = scene.medium.g != 0;
     cl::Buffer* flow = with_flow ? &st.flow : nullptr;
+    // Until the march finishes the deposit is not the lights': a march that throws (an OpenCL
+    // error) leaves a later frame marching again rather than reading a half-written deposit.
+    st.lights.clear();
+    st.diffused = st.second_current = false;
     for (cl::Buffer* b : {&st.deposit, &st.source})
       queue.enqueueFillBuffer(*b, 0.f, 0, 3 * st.volume.count() * sizeof(float));
     if (with_flow) queue.enqueueFillBuffer(st.flow, 0.f, 0, 6 * st.volume.count() * sizeof(float));
