@@ -50,7 +50,7 @@ struct LblSettings {
   bool scaled_view = false;
   bool flux_phase = false;
   bool second = true;
-  bool second_phase = true;
+  bool second_phase = false;
   double tolerance = 1e-3;
   int max_steps = 20000;
   int check_every = 16;

@@ -128,30 +128,30 @@ TEST(LblPipeline, BoxMultipleTermIsNearTheReference) {
 }
 
 // The sphere at g 0.7 (the HG single term, the forward-scattered light's share of the multiple
-// term, the second scattering's light by the phase about its direction): all terms against the
-// reference, and better than that light emitted isotropically (second_phase 0).
+// term): all terms against the reference; and the second scattering's light by the phase about
+// its direction (second_phase 1, off by default: docs/BENCHMARKS.md) brings the disc's centre
+// and rim nearer the reference here.
 TEST(LblPipeline, SphereAtG07IsNearTheReference) {
   Scene s = sphere(24, 32);
   s.medium.g = 0.7;
   LblPipeline lbl(test::shared_gpu());
-  RenderResult result = lbl.render(s, {Terms::All, {}});
-  Image got = result.image;
-  Image isotropic = lbl.render(s, {Terms::All, {{"second_phase", 0}}}).image;
-  EXPECT_NE(stage(result.plan, "view")->reason.find("the gather's mean direction"),
+  Image got = lbl.render(s, {Terms::All, {}}).image;
+  RenderResult phased = lbl.render(s, {Terms::All, {{"second_phase", 1}}});
+  EXPECT_NE(stage(phased.plan, "view")->reason.find("the gather's mean direction"),
             std::string::npos);
   RenderResult ref =
       make_pipeline("reference", test::shared_gpu())->render(s, {Terms::All, {{"spp", 4096}}});
   auto mask = coverage_mask(s, voxelize(s, {.resolution = s.voxels}));
   double noise = relative_norm(*ref.std_error, ref.image, mask);
   double ratio = mean_ratio(got, ref.image, mask), error = relative_rmse(got, ref.image, mask);
-  double error_isotropic = relative_rmse(isotropic, ref.image, mask);
-  std::printf("sphere g 0.7: ratio %.4f, error %.4f (second_phase 0: %.4f), noise %.4f\n", ratio,
-              error, error_isotropic, noise);
+  double error_phased = relative_rmse(phased.image, ref.image, mask);
+  std::printf("sphere g 0.7: ratio %.4f, error %.4f (second_phase 1: %.4f), noise %.4f\n", ratio,
+              error, error_phased, noise);
   EXPECT_LT(noise, 0.06);
-  EXPECT_NEAR(ratio, 1.0, 0.1);  // measured 1.073 (before the HG single term: about 2x)
-  // Measured 0.113 (second_phase 0: 0.145) with the reference's noise 0.050.
-  EXPECT_LT(error, 0.14);
-  EXPECT_LT(error, error_isotropic);
+  EXPECT_NEAR(ratio, 1.0, 0.1);   // measured 1.006 (before the HG single term: about 2x)
+  EXPECT_LT(error, 0.18);         // measured 0.145 with the reference's noise 0.050
+  EXPECT_LT(error_phased, 0.14);  // measured 0.113
+  EXPECT_LT(error_phased, error);
 }
 
 TEST(LblPipeline, CameraOnlyChangeRunsOnlyTheViewPass) {
