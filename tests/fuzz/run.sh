@@ -11,6 +11,8 @@ rm -rf "$scratch"
 mkdir -p "$scratch/new"
 # Leaks inside assimp (on malformed files) are not ours to fix; every other leak is a finding.
 export LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0"
+# Anything a target writes to the temporary folder stays under SCRATCH.
+export TMPDIR="$scratch"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 exec "$fuzzer" -max_total_time="$seconds" -timeout=25 -rss_limit_mb=2048 -max_len=4096 \
   -print_final_stats=1 -artifact_prefix="$scratch/" "$scratch/new" "$corpus"
