@@ -31,29 +31,34 @@ inline std::string cube_obj() {
 
 // A folder per process: cube.obj, grid.json + grid.raw (2x2x2) for scenes that name files, and the
 // scene corpus's scenes (the shipped ones, the bunny replaced by the cube) for requests that name
-// a scene. Removed at exit: the path is never destroyed (a static path's destructor, registered
-// after the atexit handler, ran before it and left the handler an empty path, so every run left
-// its folder in /tmp).
-inline const std::filesystem::path& assets_dir() {
-  static const std::filesystem::path* dir = [] {
-    auto* d = new std::filesystem::path(std::filesystem::temp_directory_path() /
-                                        ("scatter-fuzz-" + std::to_string(::getpid())));
-    std::filesystem::create_directories(*d);
-    write(*d / "cube.obj", cube_obj());
+// a scene. Removed at exit by its owner's destructor (an atexit handler registered while the
+// static path was being built ran after the path's own destructor, so every run left its folder
+// in /tmp).
+struct AssetsDir {
+  std::filesystem::path path;
+  AssetsDir()
+      : path(std::filesystem::temp_directory_path() /
+             ("scatter-fuzz-" + std::to_string(::getpid()))) {
+    std::filesystem::create_directories(path);
+    write(path / "cube.obj", cube_obj());
     float values[8] = {0, 1, 2, 3, 4, 5, 6, 7};
-    write(*d / "grid.raw", std::string_view(reinterpret_cast<const char*>(values), sizeof values));
-    write(*d / "grid.json", R"({"dims": [2, 2, 2], "data": "grid.raw", "format": "float32",
+    write(path / "grid.raw",
+          std::string_view(reinterpret_cast<const char*>(values), sizeof values));
+    write(path / "grid.json", R"({"dims": [2, 2, 2], "data": "grid.raw", "format": "float32",
                                "bounds": {"min": [-1, -1, -1], "max": [1, 1, 1]}})");
     for (const auto& e : std::filesystem::directory_iterator(SCATTER_FUZZ_CORPUS "/scene"))
-      std::filesystem::copy_file(e.path(), *d / e.path().filename(),
+      std::filesystem::copy_file(e.path(), path / e.path().filename(),
                                  std::filesystem::copy_options::overwrite_existing);
-    std::atexit([] {
-      std::error_code ignored;
-      std::filesystem::remove_all(assets_dir(), ignored);
-    });
-    return d;
-  }();
-  return *dir;
+  }
+  ~AssetsDir() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path, ignored);
+  }
+};
+
+inline const std::filesystem::path& assets_dir() {
+  static const AssetsDir dir;
+  return dir.path;
 }
 
 // parse_json, as the server calls it on bodies, messages and scene files; false when it rejects the
