@@ -149,7 +149,7 @@ void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target
   uniform1i(program, "peel", first_layer != 0);
   uniform1i(program, "first_layer", 0);
   glBindTextureUnit(0, first_layer);
-  target.bind_and_clear(Vec3{empty, empty, empty});
+  target.bind_and_clear(Vec3{empty, 0, 0});  // no slopes where no surface is
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDisable(GL_CULL_FACE);

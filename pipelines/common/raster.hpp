@@ -83,8 +83,10 @@ gpu::GlObject build_distance_program();
 
 // Draws the mesh into `target` with build_distance_program()'s program, writing the distance from
 // `origin` (along rays, or along `direction` when `along_direction`); with `first_layer` (a
-// previous layer's texture) only surfaces behind it are kept: depth peeling. Texels no surface
-// covers hold `empty`.
+// previous layer's texture) only surfaces behind it are kept: depth peeling. Red holds the
+// distance at the texel's centre, green and blue its change per texel along x and y on the
+// surface drawn there (shaders/common/distance.frag); texels no surface covers hold (`empty`, 0,
+// 0).
 void draw_distance(GLuint program, const MeshBuffers& mesh, RenderTarget& target, const Mat4& view,
                    const Mat4& projection, const Vec3& origin, const Vec3& direction,
                    bool along_direction, GLuint first_layer, float empty = 0.f);
