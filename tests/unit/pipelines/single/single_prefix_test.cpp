@@ -103,7 +103,9 @@ TEST_F(SinglePipelineTest, CoarseFrameIsNearTheFullOne) {
   coarse["exact_tr"] = 0;
   RenderResult sh = pipeline().render(s, {Terms::Single, coarse, nullptr});
   for (const StagePlan& st : sh.plan.stages)
-    if (st.name == "splat") EXPECT_NE(st.reason.find("coarse needs exact_tr"), std::string::npos);
+    if (st.name == "splat") {
+      EXPECT_NE(st.reason.find("coarse needs exact_tr"), std::string::npos);
+    }
 }
 
 // A frame without the gradient reuses a light's pass made with it (the moving frames after a
