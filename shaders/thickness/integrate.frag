@@ -46,9 +46,7 @@ vec3 exp_mean(vec3 a, vec3 b) {
 // The distance light i's map holds at uv: the nearest texel's, at the point itself rather than
 // at the texel's centre (the texel keeps its surface's slope per texel, shaders/common/
 // distance.frag). Exact on a flat face seen from a directional light, to second order in the
-// texel otherwise; read at the texel's centre it was off by up to half a texel times the slope,
-// which times sigma_t is the light's transmittance off by 4 % at 10 mean free paths per voxel and
-// 50 % at 1,000.
+// texel otherwise (docs/pipelines/thickness.md).
 float map_distance(int i, vec2 uv) {
   ivec2 n = textureSize(shadow_maps[i], 0);
   vec2 p = uv * vec2(n) - 0.5;  // in texels, centres at whole numbers

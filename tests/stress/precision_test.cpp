@@ -169,9 +169,9 @@ double rtol(const std::string& pipeline) {
 // nearest shadow-map texel's surface, its distance at the texel's centre carried to the point by
 // the surface's slope: exact on a face, but where the box's edge (seen from the light) crosses a
 // texel, the texel's face may not be the point's. Those pixels measure the map's resolution, not
-// float32 (docs/STRESS.md, known limitations: the oblique camera at sigma_t x voxel 30 has one,
-// 0.71 of float64), so it is held to the axis camera's inner pixels, whose rays stay clear of the
-// edges.
+// float32 (docs/STRESS.md, failures found and fixed: the oblique camera at sigma_t x voxel 30 has
+// one, 0.71 of float64), so it is held to the axis camera's inner pixels, whose rays stay clear of
+// the edges.
 bool compared(const std::string& pipeline, const std::string& camera) {
   return pipeline == "reference" || camera == "axis";
 }
