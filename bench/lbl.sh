@@ -16,7 +16,8 @@
 #           (bench/out/ref-NAME.exr: 2048 spp, 8192 at g 0.7 and 0.9; ref-NAME.single.exr):
 #           bench/out/lbl-targets.csv (SET="k=v ..." adds lbl settings)
 #  slab-targets  the slab at tau 2-8, albedo 0.9 and 0.99, g 0 and 0.75, mu0 1 and 0.1, relative
-#           differences: bench/out/lbl-targets-slab.csv
+#           differences: bench/out/lbl-targets-slab.csv (SLAB="--scaled-view 1" or "--orders N"
+#           adds the lbl slab's options)
 # Usage: bench/lbl.sh [SCATTERD] [PARTS...]
 #   (parts: slab images albedo interleave bandwidth frames targets slab-targets; default the
 #   first six)
@@ -144,7 +145,7 @@ if has slab-targets; then
       for tau in 2 4 8; do
         for a in 0.9 0.99; do
           ref=$($S slab --tau $tau --albedo $a --g $g --mu0 $mu0 --solver reference --photons 400000 --json)
-          lbl=$($S slab --tau $tau --albedo $a --g $g --mu0 $mu0 --solver lbl --json)
+          lbl=$($S slab --tau $tau --albedo $a --g $g --mu0 $mu0 --solver lbl ${SLAB:-} --json)
           jq -rn --argjson r "$ref" --argjson l "$lbl" --arg tau $tau --arg a $a --arg g $g --arg m $mu0 \
             '[$tau, $a, $g, $m, $r.R, $l.R, ($l.R / $r.R - 1), $r.T, $l.T, ($l.T / $r.T - 1)] | @csv' \
             >> "$out/lbl-targets-slab.csv"

@@ -1,5 +1,6 @@
 // scatterd slab --tau T|inf --albedo A --g G --mu0 M --ior N --solver reference|lbl [--photons K]
-//               [--seed S] [--second 0|1] [--json]
+//               [--seed S] [--second 0|1] [--scaled-view 0|1]
+//               [--orders N] [--json]
 // lbl: the lbl pipeline's lattice at steady state (finite tau, ior 1; photons and seed unused).
 #include <cmath>
 #include <iostream>
@@ -74,6 +75,14 @@ Handler add_slab_command(CLI::App& app) {
   cmd->add_option("--second", o->lbl.second,
                   "lbl: 1 computes the second scattering exactly and starts the lattice from it "
                   "(the pipeline's setting `second`)")
+      ->capture_default_str();
+  cmd->add_option("--scaled-view", o->lbl.scaled_view,
+                  "lbl: 1 reads the whole slab as the delta-Eddington scaled problem; 0 as the "
+                  "pipeline's view pass reads the medium by default")
+      ->capture_default_str();
+  cmd->add_option("--orders", o->lbl.orders,
+                  "lbl: N in [2, 32] computes the real medium's orders 2 to N exactly and starts "
+                  "the lattice from order N's light (a diagnostic); 0: off")
       ->capture_default_str();
   return [o] { return run_slab(*o); };
 }

@@ -48,6 +48,41 @@ std::pair<double, double> layer_escape(int k, int layers, double d,
   return {up / (2 * d), down / (2 * d)};
 }
 
+// The chances that light emitted evenly over layer k with the HG phase about the beam (cosine
+// mu0 to the normal, travelling into the slab) leaves through the lit face (first) and the other
+// (second) without another interaction: per direction the phase, azimuth summed (phase_up and
+// phase_down, per node of `nodes`), times the layer's mean transmittance to the face.
+struct PhaseNodes {
+  std::vector<std::pair<double, double>> nodes;
+  std::vector<double> up, down;  // integral over the azimuth of HG, going up and down at cosine mu
+};
+PhaseNodes phase_nodes(double mu0, double g, int n) {
+  PhaseNodes p{mu_nodes(n), {}, {}};
+  const double sin0 = std::sqrt(std::max(0.0, 1 - mu0 * mu0));
+  const int azimuths = 256;
+  for (auto [mu, dmu] : p.nodes) {
+    double sin1 = std::sqrt(std::max(0.0, 1 - mu * mu)), up = 0, down = 0;
+    for (int j = 0; j < azimuths; ++j) {
+      double c = std::cos(kPi * (j + 0.5) / azimuths);
+      up += hg(sin0 * sin1 * c - mu0 * mu, g);
+      down += hg(sin0 * sin1 * c + mu0 * mu, g);
+    }
+    p.up.push_back(up * 2 * kPi / azimuths);
+    p.down.push_back(down * 2 * kPi / azimuths);
+  }
+  return p;
+}
+std::pair<double, double> layer_escape_phase(int k, int layers, double d, const PhaseNodes& p) {
+  double up = 0, down = 0;
+  double t0 = k * d, t1 = (k + 1) * d, b0 = (layers - 1 - k) * d, b1 = (layers - k) * d;
+  for (size_t i = 0; i < p.nodes.size(); ++i) {
+    auto [mu, dmu] = p.nodes[i];
+    up += p.up[i] * mu * (std::exp(-t0 / mu) - std::exp(-t1 / mu)) * dmu;
+    down += p.down[i] * mu * (std::exp(-b0 / mu) - std::exp(-b1 / mu)) * dmu;
+  }
+  return {up / d, down / d};
+}
+
 // The chance that light emitted isotropically and evenly over a layer of optical thickness d
 // reaches a plane D beyond the layer's near face (either way: half the directions), without a
 // collision: (1 / 2 d) integral_0^1 mu (exp(-D / mu) - exp(-(D + d) / mu)) d mu.
@@ -81,6 +116,50 @@ std::vector<float> slab_second(const std::vector<float>& first, int layers, doub
   return second;
 }
 
+// The next order's events per layer in the real medium (uniform layers of optical thickness d,
+// albedo a): the light `emitted` per layer (scattered power) with each layer's phase (`ph`: HG
+// summed over the azimuth per node, going up and down), colliding in each layer, times a; `mean`:
+// the mean cosine (to +z) of the light arriving at those events (net over total).
+std::vector<double> slab_next_order(const std::vector<double>& emitted,
+                                    const std::vector<PhaseNodes>& ph, double d, double a,
+                                    std::vector<double>& mean) {
+  const int layers = static_cast<int>(emitted.size());
+  std::vector<double> next(layers, 0), nextm(layers, 0);
+  const auto& nodes = ph[0].nodes;
+  for (int j = 0; j < layers; ++j) {
+    if (!(emitted[j] > 0)) continue;
+    for (size_t i = 0; i < nodes.size(); ++i) {
+      auto [mu, dmu] = nodes[i];
+      double wd = ph[j].down[i] * dmu * emitted[j], wu = ph[j].up[i] * dmu * emitted[j];
+      auto reach = [&](double D) { return mu * (std::exp(-D / mu) - std::exp(-(D + d) / mu)) / d; };
+      double self = 1 - reach(0);
+      next[j] += (wd + wu) * self;
+      nextm[j] += (wd - wu) * self * mu;
+      double prev = reach(0);
+      for (int m = 1; m < layers; ++m) {
+        double cur = reach(m * d), c = prev - cur;
+        prev = cur;
+        if (c < 1e-14) break;
+        if (j + m < layers) next[j + m] += wd * c, nextm[j + m] += wd * c * mu;
+        if (j - m >= 0) next[j - m] += wu * c, nextm[j - m] -= wu * c * mu;
+      }
+    }
+  }
+  mean.assign(layers, 0);
+  for (int k = 0; k < layers; ++k) {
+    mean[k] = next[k] > 0 ? nextm[k] / next[k] : 0;
+    next[k] *= a;
+  }
+  return next;
+}
+
+// HG(g |m|) about +z or -z (the sign of m), azimuth summed, on `n` nodes.
+PhaseNodes axis_phase(double g, double m, int n) {
+  PhaseNodes ph = phase_nodes(1.0, g * std::min(1.0, std::abs(m)), n);
+  if (m < 0) std::swap(ph.up, ph.down);
+  return ph;
+}
+
 }  // namespace
 
 SingleScattering slab_single_scattering(const SlabParams& p) {
@@ -91,24 +170,17 @@ SingleScattering slab_single_scattering(const SlabParams& p) {
   //   down: (exp(-tau / mu) - exp(-tau / mu0)) / (k mu0), k = 1 / mu0 - 1 / mu
   // and the directions by quadrature over mu and the azimuth (HG about the beam's direction).
   SingleScattering s;
-  const double mu0 = p.mu0, tau = p.tau, sin0 = std::sqrt(std::max(0.0, 1 - mu0 * mu0));
-  const int azimuths = 256;
-  for (auto [mu, dmu] : mu_nodes(600)) {
-    double sin1 = std::sqrt(std::max(0.0, 1 - mu * mu));
-    double up = 0, down = 0;
-    for (int j = 0; j < azimuths; ++j) {
-      double c = std::cos(kPi * (j + 0.5) / azimuths);  // phi over (0, pi), doubled below
-      up += hg(sin0 * sin1 * c - mu0 * mu, p.g);
-      down += hg(sin0 * sin1 * c + mu0 * mu, p.g);
-    }
-    double dphi = 2 * kPi / azimuths;
+  const double mu0 = p.mu0, tau = p.tau;
+  const PhaseNodes phase = phase_nodes(mu0, p.g, 600);
+  for (size_t i = 0; i < phase.nodes.size(); ++i) {
+    auto [mu, dmu] = phase.nodes[i];
     double up_depth = mu / (mu + mu0) * -std::expm1(-tau * (1 / mu0 + 1 / mu));
     double k = 1 / mu0 - 1 / mu;
     double down_depth = std::abs(k * tau) < 1e-6
                             ? tau / mu0 * std::exp(-tau / mu)
                             : (std::exp(-tau / mu) - std::exp(-tau / mu0)) / (k * mu0);
-    s.R += p.albedo * up * dphi * up_depth * dmu;
-    s.T += p.albedo * down * dphi * down_depth * dmu;
+    s.R += p.albedo * phase.up[i] * up_depth * dmu;
+    s.T += p.albedo * phase.down[i] * down_depth * dmu;
   }
   return s;
 }
@@ -123,12 +195,16 @@ void to_json(nlohmann::json& j, const LblSlabResult& r) {
        {"T_direct", r.T_direct},
        {"R_single", r.R_single},
        {"T_single", r.T_single},
+       {"R_forward", r.R_forward},
+       {"T_forward", r.T_forward},
        {"R_lattice", r.R_lattice},
        {"T_lattice", r.T_lattice},
        {"absorbed", r.absorbed},
+       {"orders", nlohmann::json::array()},
        {"layers", r.layers},
        {"steps", r.steps},
        {"converged", r.converged}};
+  for (const SingleScattering& o : r.orders) j["orders"].push_back({{"R", o.R}, {"T", o.T}});
 }
 
 LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSlabOptions& o) {
@@ -139,6 +215,7 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   check(p.g > -1 && p.g < 1, "g", "must be in (-1, 1)");
   check(p.mu0 > 0 && p.mu0 <= 1, "mu0", "must be in (0, 1]");
   check(p.ior == 1, "ior", "the lbl solver has no refracting boundary: only 1 is supported");
+  check(o.orders == 0 || (o.orders >= 2 && o.orders <= 32), "orders", "must be 0 or in [2, 32]");
 
   LblSlabResult r;
   r.layers = std::clamp(static_cast<int>(std::ceil(p.tau / o.layer_tau)), 32, 20000);
@@ -186,9 +263,36 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
     for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(s);
   }
   // With `second`: the lattice from the second scattering (in the scaled medium), which the
-  // view then sees next to the lattice's irradiance.
+  // view then sees next to the lattice's irradiance. With `orders` N: the real medium's orders 2
+  // to N exactly (slab_next_order), each order's light by HG(g |m|) about its mean direction,
+  // and the lattice from what order N's light does not let out directly.
   std::vector<float> second;
-  if (o.second) {
+  if (o.orders >= 2) {
+    std::vector<double> emitted(r.layers), mean;
+    for (int k = 0; k < r.layers; ++k)
+      emitted[k] = std::exp(-k * dtau / p.mu0) * p.albedo * -std::expm1(-dtau / p.mu0);
+    std::vector<PhaseNodes> phase(r.layers, phase_nodes(p.mu0, p.g, 200));
+    for (int order = 2; order <= o.orders; ++order) {
+      emitted = slab_next_order(emitted, phase, dtau, p.albedo, mean);
+      SingleScattering leaves;
+      for (int k = 0; k < r.layers; ++k) {
+        phase[k] = axis_phase(p.g, mean[k], 200);
+        auto [e_up, e_down] = layer_escape_phase(k, r.layers, dtau, phase[k]);
+        leaves.R += emitted[k] * e_up;
+        leaves.T += emitted[k] * e_down;
+      }
+      r.orders.push_back(leaves);
+    }
+    // The lattice's source: order N's light that interacts again, 1 - E of it (E its escape
+    // through the real medium by its phase), emitted isotropically in the scaled medium, whose
+    // isotropic emission interacts again 1 - P' of the time (P' as the escape correction's).
+    for (int k = 0; k < r.layers; ++k) {
+      auto [e_up, e_down] = layer_escape_phase(k, r.layers, dtau, phase[k]);
+      auto [s_up, s_down] = layer_escape(k, r.layers, dtau_s, esc_nodes);
+      double keep = (1 - e_up - e_down) / std::max(1e-12, 1 - s_up - s_down);
+      for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(emitted[k] * keep);
+    }
+  } else if (o.second) {
     second = slab_second(source, r.layers, dtau_r, albedo_r, esc_nodes);
     source = second;
   }
@@ -205,36 +309,64 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   const int up = 4, down = 5;  // +z, -z
   r.R_lattice = f[(down * 3) * n + 0];
   r.T_lattice = f[(up * 3) * n + (n - 1)] + std::exp(-r.layers * dtau_r / p.mu0) - r.T_direct;
-  // As the pipeline's view pass sees the medium: the single scattering exactly, the second
-  // scattering (with `second`) and the lattice's scattered power per layer (the third and later
-  // events; without `second`, the second and later) emitted isotropically and leaving
-  // each face with the transport's escape probability from a uniform layer (layer_escape).
-  // scaled_view with g != 0: the whole slab as the delta-Eddington scaled problem (tau (1 - a g),
-  // albedo a (1 - g) / (1 - a g), isotropic), its forward peak left in the beam, which then
-  // carries the light scattered forward out of the far face.
-  SlabParams scaled = p;
-  if (o.scaled_view && p.g != 0) {
-    scaled.tau = p.tau * (1 - p.albedo * p.g);
-    scaled.albedo = albedo_r;
-    scaled.g = 0;
+  // As the pipeline's view pass sees the medium (scaled_view 0, its default): the single
+  // scattering exactly (HG phase, the real medium); the second scattering (with `second`) and
+  // the lattice's scattered power per layer (the third and later events; without `second`, the
+  // second and later) emitted isotropically through the real medium, leaving each face with the
+  // transport's escape probability from a uniform layer (layer_escape); with g != 0 the forward-
+  // scattered light (below). scaled_view 1 with g != 0: the whole slab as the delta-Eddington
+  // scaled problem (tau (1 - a g), albedo a (1 - g) / (1 - a g), isotropic; not the pipeline's
+  // scaled_view 1, which keeps the real single term), its forward peak left in the beam, which
+  // then carries the light scattered forward out of the far face. With `orders`: the single
+  // scattering and the exact orders in the real medium, the lattice's light as the scaled
+  // problem emits and attenuates it.
+  const bool scaled = o.scaled_view && p.g != 0 && o.orders < 2;
+  SlabParams single_params = p;
+  if (scaled) {
+    single_params.tau = p.tau * (1 - p.albedo * p.g);
+    single_params.albedo = albedo_r;
+    single_params.g = 0;
   }
-  SingleScattering single = slab_single_scattering(scaled);
+  SingleScattering single = slab_single_scattering(single_params);
   r.R_single = single.R;
   r.T_single = single.T;
-  const double forward = std::exp(-scaled.tau / p.mu0) - r.T_direct;
+  const double forward = std::exp(-single_params.tau / p.mu0) - r.T_direct;
   std::vector<float> irr = lattice.irradiance();
-  // scaled_view: as the pipeline's setting, the lattice's light emitted and attenuated in the
-  // delta-Eddington scaled medium, (1 - g) irr through layers of dtau (1 - a g).
-  const double view_dtau = o.scaled_view ? dtau_s : dtau;
-  const double view_emit = o.scaled_view ? 1 - p.g : 1;
+  // The lattice's light in the scaled medium: (1 - g) irr through layers of dtau (1 - a g).
+  const bool lattice_scaled = scaled || o.orders >= 2;
+  const double view_dtau = lattice_scaled ? dtau_s : dtau;
+  const double view_emit = lattice_scaled ? 1 - p.g : 1;
   double R_multiple = 0, T_multiple = 0;
+  for (const SingleScattering& order : r.orders) {
+    R_multiple += order.R;
+    T_multiple += order.T;
+  }
   for (int k = 0; k < r.layers; ++k) {
     // irr in the real sigma_s's share; the second scattering in the scaled medium's.
-    double e = (irr[3 * k] + (o.second ? second[3 * k] / (1 - p.g) : 0.0)) * view_emit;
+    double e = (irr[3 * k] + (!second.empty() ? second[3 * k] / (1 - p.g) : 0.0)) * view_emit;
     if (!(e > 0)) continue;
     auto [e_up, e_down] = layer_escape(k, r.layers, view_dtau, esc_nodes);
     R_multiple += e * e_up;
     T_multiple += e * e_down;
+  }
+  // The pipeline's view (not scaled, no orders), as the march's `extra` and the view's
+  // multiple_emission: what the scaled beam carries beyond the real one was scattered forward;
+  // its scattering in each layer (sigma_s times that light's path there) is emitted with the HG
+  // phase about the beam and seen through the real medium.
+  if (!scaled && o.orders < 2 && p.g != 0) {
+    const PhaseNodes phase = phase_nodes(p.mu0, p.g, 400);
+    for (int k = 0; k < r.layers; ++k) {
+      double q = std::exp(-k * dtau_r / p.mu0), real = std::exp(-k * dtau / p.mu0);
+      double path_q = q * -std::expm1(-dtau_r / p.mu0) / dtau_r;
+      double path_real = real * -std::expm1(-dtau / p.mu0) / dtau;
+      double e = p.albedo * dtau * (path_q - path_real);
+      if (!(e > 0)) continue;
+      auto [e_up, e_down] = layer_escape_phase(k, r.layers, dtau, phase);
+      r.R_forward += e * e_up;
+      r.T_forward += e * e_down;
+    }
+    R_multiple += r.R_forward;
+    T_multiple += r.T_forward;
   }
   r.R_diffuse = r.R_single + R_multiple;
   r.T_diffuse = r.T_single + T_multiple + forward;
