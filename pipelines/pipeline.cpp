@@ -58,8 +58,8 @@ double SettingsReader::number(const std::string& key, double fallback, double lo
   if (it == settings_.end()) return fallback;
   if (!(it->second >= lo && it->second <= hi)) {
     std::ostringstream msg;
-    msg << "must be in [" << lo << ", " << hi << "] for pipeline " << pipeline_ << ", got "
-        << it->second;
+    msg << "must be in [" << exact_number(lo) << ", " << exact_number(hi) << "] for pipeline "
+        << pipeline_ << ", got " << exact_number(it->second);
     throw ValidationError("settings." + key, msg.str());
   }
   return it->second;

@@ -4,6 +4,7 @@
 // error, not a silent default.
 #pragma once
 
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -20,6 +21,9 @@ struct Range {
   double lo;
   double hi;
 };
+// Every finite number: for values whose range another check states (a pipeline's settings,
+// checked against that pipeline's own ranges, so that the error names the limit that applies).
+constexpr Range kAnyFinite{-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()};
 
 class JsonObject {
  public:

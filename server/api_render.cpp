@@ -30,7 +30,7 @@ Api::RenderSpec Api::read_render_spec(JsonObject& r, const nlohmann::json& reque
   }
   if (auto s = r.optional_object("settings")) {
     for (const auto& [key, value] : request["settings"].items())
-      spec.settings[key] = s->number(key, std::nullopt, {-1e9, 1e9});
+      spec.settings[key] = s->number(key, std::nullopt, kAnyFinite);
     s->finish();
   }
   if (r.has("scene") == r.has("scene_name"))

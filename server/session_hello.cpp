@@ -37,7 +37,7 @@ std::optional<Composite> read_composite(JsonObject& m, const nlohmann::json& msg
   out.scale = c->number("scale", out.scale, {0.125, 1});
   if (auto s = c->optional_object("settings")) {
     for (const auto& [key, value] : msg["composite"]["settings"].items())
-      out.settings[key] = s->number(key, std::nullopt, {-1e9, 1e9});
+      out.settings[key] = s->number(key, std::nullopt, kAnyFinite);
     s->finish();
   }
   try {

@@ -62,8 +62,11 @@ TEST_F(ApiTest, PipelinesCarryTheirSettingsTables) {
   EXPECT_TRUE(samples);
   nlohmann::json lbl = find("lbl");
   EXPECT_EQ(lbl["default_terms"], "all");
-  for (const auto& s : lbl["settings"])
-    if (s["key"] == "directions") EXPECT_EQ(s["allowed"], nlohmann::json::array({6, 18}));
+  for (const auto& s : lbl["settings"]) {
+    if (s["key"] == "directions") {
+      EXPECT_EQ(s["allowed"], nlohmann::json::array({6, 18}));
+    }
+  }
   EXPECT_EQ(find("auto")["delegates"],
             nlohmann::json::array({"thickness", "single", "lbl", "psf", "reference"}));
   EXPECT_FALSE(find("psf")["bakes"].get<bool>());
@@ -82,6 +85,12 @@ TEST_F(ApiTest, SettingsAreCheckedAtTheEdge) {
       r.status,
       400);  // below reference's range, though auto picks thickness for the sphere's single term
   EXPECT_EQ(json(r)["field"], "settings.spp");
+  // A value far out of range is told the pipeline's own limits, exactly.
+  r = call("POST", "/api/render",
+           R"({"scene_name": "sphere", "pipeline": "reference", "settings": {"spp": 1e12}})");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_EQ(json(r)["error"],
+            "settings.spp: must be in [3, 1048576] for pipeline reference, got 1e+12");
   r = call("POST", "/api/bakes", R"({"scene_name": "sphere", "pipeline": "psf"})");
   EXPECT_EQ(r.status, 400);
   EXPECT_NE(json(r)["error"].get<std::string>().find("needs no bake"), std::string::npos);
