@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <numbers>
+#include <sstream>
 
 #include "protocol/digest.hpp"
 
@@ -146,13 +147,21 @@ std::shared_ptr<GridDensity> load_grid(JsonObject& obj, const std::filesystem::p
     n[a] = dims[a].get<int>();
   }
   h.choice("format", {"float32"}, "float32");
-  Aabb box;
+  // min and max as given: a box grown from the two points would take max < min for a flipped
+  // axis and read the values the other way round.
   JsonObject b = h.object("bounds");
-  box.add(b.vec3("min", std::nullopt, {-1e6, 1e6}));
-  box.add(b.vec3("max", std::nullopt, {-1e6, 1e6}));
+  Vec3 lo = b.vec3("min", std::nullopt, {-1e6, 1e6}), hi = b.vec3("max", std::nullopt, {-1e6, 1e6});
   b.finish();
   for (int a = 0; a < 3; ++a)
-    if (box.hi[a] <= box.lo[a]) throw ValidationError(h.path("bounds"), "max must exceed min");
+    if (hi[a] <= lo[a]) {
+      std::ostringstream msg;
+      msg << "max must exceed min on every axis ("
+          << "xyz"[a] << ": min " << lo[a] << ", max " << hi[a] << ")";
+      throw ValidationError(h.path("bounds"), msg.str());
+    }
+  Aabb box;
+  box.add(lo);
+  box.add(hi);
   std::filesystem::path data_path = header_path.parent_path() / h.string("data", std::nullopt);
   h.finish();
   size_t count = size_t(n[0]) * n[1] * n[2];

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <set>
@@ -167,6 +168,11 @@ HttpResponse Api::assets(const HttpRequest& request) {
   for (double v : d)
     if (v != std::floor(v) || v < 1 || v > 512)
       throw ValidationError("dims", "must be integers in [1, 512]");
+  for (int a = 0; a < 3; ++a)
+    if (!(std::abs(b[a]) <= 1e6 && std::abs(b[a + 3]) <= 1e6 && b[a] < b[a + 3]))
+      throw ValidationError("bounds",
+                            "must be x0,y0,z0,x1,y1,z1 in [-1e6, 1e6] with x1 > x0, y1 > y0 and "
+                            "z1 > z0");
   nlohmann::json header = {{"dims", {int(d[0]), int(d[1]), int(d[2])}},
                            {"format", "float32"},
                            {"data", id + ".raw"},

@@ -116,6 +116,13 @@ TEST(Density, GridFilesThatLieAreRejected) {
           floats({1}))
           .find("max must exceed min"),
       std::string::npos);
+  // A flipped axis (max below min) is refused, not read as the box the two corners span.
+  EXPECT_NE(
+      error(
+          R"({"dims": [1, 1, 1], "data": "g.raw", "bounds": {"min": [0, 1, 0], "max": [1, 0, 1]}})",
+          floats({1}))
+          .find("max must exceed min on every axis (y: min 1, max 0)"),
+      std::string::npos);
   EXPECT_NE(error(R"({"dims": [1, 1, 1], "data": "g.raw")", floats({1})).find("not valid JSON"),
             std::string::npos);
 }

@@ -190,6 +190,13 @@ TEST(ServerAssets, UploadListAndRenderWithThem) {
                     values)
                 .result_int(),
             400);
+  // Bounds with an axis flipped or not finite are refused by name, before anything is written.
+  for (const char* bounds : {"1,-1,-1,-1,1,1", "-1,-1,-1,1,1,nan", "-1,-1,-1,1,1,1e300"}) {
+    r = request(port, http::verb::post,
+                std::string("/api/assets?kind=grid&dims=2,2,2&bounds=") + bounds, values);
+    EXPECT_EQ(r.result_int(), 400) << bounds;
+    EXPECT_EQ(json(r)["field"], "bounds") << bounds;
+  }
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir / "assets"), {}), files_before);
   // A scene made of the uploads renders.
   nlohmann::json scene = test::minimal_scene();
