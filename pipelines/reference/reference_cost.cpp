@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "pipelines/cost_support.hpp"
+#include "pipelines/reference/cell_triangles.hpp"
 #include "pipelines/reference/reference_pipeline.hpp"
 
 namespace scatter {
@@ -18,26 +19,42 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
   const std::string grid = g.text() + " voxels";
   // Peak while uploading (render: voxelize(), then upload_medium()); the grid lives to the end.
   add_medium_upload(upload, scene, g);
+  const bool march = request.terms == Terms::Single && !s.mc;
+  const bool mesh = scene.medium.ior != 1.0 || !s.voxel_boundary;
+  // Made before the upload and alive through it where the mesh bounds the medium: the interior
+  // depth (a byte a voxel, host and device) and, for a mesh of kCellListsMinTriangles or more
+  // (or cells 1), the voxels' triangle lists (first 4 B, skip 1 B, host and device); each is
+  // computed through a 4-byte-a-voxel distance array whose freed pages stay resident (measured:
+  // 16 B a voxel at 146^3 for the sphere, `CostTest.ReferenceTracksMeasuredMemory`).
+  const double tris = mesh ? double(scene.mesh->triangle_count()) : 0;
+  const bool cells =
+      mesh && !march && (s.cells == 1 || (s.cells == 2 && tris >= kCellListsMinTriangles));
+  if (mesh) {
+    upload.host("scene.voxels", n * (cells ? 10 : 5),
+                grid + (cells ? " x 10 B" : " x 5 B") + " (interior depth" +
+                    (cells ? ", cell lists)" : ")"));
+    upload.device("scene.voxels", n * (cells ? 6 : 1),
+                  grid + (cells ? " x 6 B" : " x 1 B") + " (the same on the device)");
+  }
   // Later, per frame: the grid and two medium buffers stay; Monte Carlo adds sum, sum_sq, part
   // and batch_sq (device), zeros, their four host copies, the mean and the standard error
   // (host); the marcher one output buffer and the image.
-  const bool march = request.terms == Terms::Single && !s.mc;
   frame.host("scene.voxels", n * kGridBytes, grid + " x 29 B (grid)");
   frame.device("scene.voxels", n * 24, grid + " x 24 B (sigma_s, sigma_t)");
   frame.host("scene.image.width", px * (march ? 12 : 96),
              std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px x " +
                  (march ? "12" : "96") + " B");
   frame.device("scene.image.width", px * (march ? 12 : 48), "the image's device buffers");
-  if (scene.medium.ior != 1.0 || !s.voxel_boundary) {
+  if (mesh) {
     // FlatBvh (scene/bvh.hpp) on the host and its three buffers: ~2 nodes and 9 floats a triangle
-    // (the mesh bounds the medium); the interior depth, a byte a voxel, and the convexity check's
-    // edge map; a convex mesh's exit maps, per light about 4 cells (16 B) and 14
+    // (the mesh bounds the medium); the interior depth and the cell lists (above) and the
+    // convexity check's edge map; a convex mesh's exit maps, per light about 4 cells (16 B) and 14
     // list entries (56 B) a triangle, and their build's vectors on the host (4.5x that).
-    double tris = double(scene.mesh->triangle_count());
     const double maps = s.exit_maps && !march ? double(scene.lights.size()) * tris * 72 : 0;
-    frame.host("scene.mesh", tris * 100 + n + tris * 3 * 48 + maps * 4.5,
-               "BVH, interior depth, edge map, exit maps");
-    frame.device("scene.mesh", tris * 100 + n + maps, "BVH buffers, interior depth, exit maps");
+    frame.host("scene.mesh", tris * 100 + n * (cells ? 6 : 1) + tris * 3 * 48 + maps * 4.5,
+               "BVH, interior depth, cell lists, edge map, exit maps");
+    frame.device("scene.mesh", tris * 100 + n * (cells ? 6 : 1) + maps,
+                 "BVH buffers, interior depth, cell lists, exit maps");
   }
 
   const double lights = std::max<size_t>(scene.lights.size(), 1), covered = px * coverage(scene);

@@ -7,6 +7,7 @@
 #include <boost/beast/websocket.hpp>
 #include <chrono>
 #include <future>
+#include <regex>
 #include <thread>
 
 #include "../test_util.hpp"
@@ -174,6 +175,10 @@ TEST_F(ServiceTest, CostlyRequestsAreRefusedNamingTheFieldAndTheLimit) {
   auto j = nlohmann::json::parse(r.body());
   EXPECT_EQ(j["field"], "scene.voxels");
   EXPECT_NE(j["error"].get<std::string>().find("--max-request-mb"), std::string::npos) << j.dump();
+  // The amount in whole megabytes ("would need about 12345 MB"), not "1.23e+04".
+  EXPECT_TRUE(
+      std::regex_search(j["error"].get<std::string>(), std::regex("would need about [0-9]{4,} MB")))
+      << j.dump();
   r = post("/api/render",
            {{"scene", scene}, {"pipeline", "thickness"}, {"settings", {{"shadow_size", 8192}}}});
   ASSERT_EQ(r.result_int(), 413) << r.body();
