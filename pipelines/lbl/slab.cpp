@@ -216,6 +216,8 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   check(p.mu0 > 0 && p.mu0 <= 1, "mu0", "must be in (0, 1]");
   check(p.ior == 1, "ior", "the lbl solver has no refracting boundary: only 1 is supported");
   check(o.orders == 0 || (o.orders >= 2 && o.orders <= 32), "orders", "must be 0 or in [2, 32]");
+  check(o.orders == 0 || p.tau <= 100, "tau",
+        "must be at most 100 with orders (each order's quadrature grows with the layers squared)");
 
   LblSlabResult r;
   r.layers = std::clamp(static_cast<int>(std::ceil(p.tau / o.layer_tau)), 32, 20000);

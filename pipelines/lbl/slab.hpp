@@ -29,8 +29,9 @@ struct LblSlabOptions {
   bool escape = true;        // scale each layer's emission by the escape correction (escape.hpp)
   bool scaled_view = false;  // 1: read the whole slab as the delta-Eddington scaled problem
   bool second = true;        // as the pipeline's setting: the second scattering exactly
-  // N >= 2: the real medium's orders 2 to N exactly, the lattice from order N's light (a
-  // diagnostic: what the lattice's tail costs; not a pipeline setting). 0: off.
+  // N in [2, 32]: the real medium's orders 2 to N exactly, the lattice from order N's light (a
+  // diagnostic: what the lattice's tail costs; not a pipeline setting; `second` and
+  // `scaled_view` do not apply; tau at most 100). 0: off.
   int orders = 0;
 };
 

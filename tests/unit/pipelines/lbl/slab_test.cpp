@@ -80,6 +80,8 @@ TEST(LblSlab, ExactOrdersBringTheSlabToTheReference) {
   }
   SlabParams p;
   EXPECT_THROW(run_lbl_slab(test::shared_gpu().cl(), p, {.orders = 1}), ValidationError);
+  p.tau = 200;
+  EXPECT_THROW(run_lbl_slab(test::shared_gpu().cl(), p, {.orders = 2}), ValidationError);
 }
 
 TEST(LblSlab, AbsorbingSlabWithoutScatteringOnlyTransmitsTheBeam) {
