@@ -14,6 +14,8 @@ cd "$(dirname "$0")/.."
 out=bench/out
 S=${SCATTERD:-build/scatterd}  # a copy keeps a long run safe from rebuilds
 mkdir -p "$out"
+source bench/lib/install.sh
+bench_install python3-numpy python3-openimageio  # bench/psf_compose_all.py
 python3 - "$out" <<'PY'
 import json, sys, math
 out = sys.argv[1]

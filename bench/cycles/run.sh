@@ -23,17 +23,8 @@ out=bench/out/cycles
 mkdir -p "$out"
 py=/usr/bin/python3
 
-need=()
-command -v blender >/dev/null 2>&1 || need+=(blender)
-$py -c "import numpy, OpenImageIO" 2>/dev/null || need+=(python3-numpy python3-openimageio)
-if [ ${#need[@]} -gt 0 ]; then
-  sudo=""
-  [ "$(id -u)" -eq 0 ] || sudo="sudo"
-  echo "cycles: installing ${need[*]}" >&2
-  export DEBIAN_FRONTEND=noninteractive
-  $sudo apt-get update -qq
-  $sudo apt-get install -y -qq "${need[@]}" >/dev/null
-fi
+source bench/lib/install.sh
+bench_install blender python3-numpy python3-openimageio
 
 echo "| g | reference noise (spp) | Cycles noise (spp) | rRMSE apart | Z-test pass | reference ms/spp | Cycles ms/spp | time to 5 %: reference / Cycles | time to 2 % |"
 echo "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
