@@ -1,7 +1,5 @@
 #include "pipelines/lbl/lbl_frame.hpp"
 
-#include <cmath>
-
 #include "bake/cache.hpp"
 #include "core/errors.hpp"
 #include "pipelines/asset_key.hpp"
@@ -172,10 +170,19 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
                                      : std::string("isotropic")) +
                                 (s.scaled_view ? " and seen through the scaled medium" : "")
                           : "";
+  // Where the multiple term is least accurate, and why (docs/BENCHMARKS.md, lbl: the sphere at
+  // g 0.7 11 % on all terms, at g 0.9 26 % beyond the reference's noise; the slab at g 0.75
+  // 10-60 %, its reading of the medium not conservative). Back-scattering media: not measured.
+  const std::string caveat =
+      d.multiple && scene.medium.g >= 0.6
+          ? "; at g " + short_number(scene.medium.g) +
+                " the multiple term is lbl's least accurate (a delta-Eddington lattice behind "
+                "one exact scattering: measured 10-30 % off at g 0.7-0.9)"
+          : "";
   p.stages.push_back(
       {"view", true,
        std::string(d.bend ? "eye rays refracted by grad n" : "straight eye rays (DDA)") +
-           ", gathering " + gathers + phase});
+           ", gathering " + gathers + phase + caveat});
   p.stages.push_back({"readback", true, "linear RGB to the host"});
   return p;
 }

@@ -154,6 +154,25 @@ TEST(LblPipeline, SphereAtG07IsNearTheReference) {
   EXPECT_LT(error_phased, error);
 }
 
+// A strongly forward-scattering medium's plan says that its multiple term is lbl's least
+// accurate; the single term alone, or a g 0 medium, says nothing of it (nor a back-scattering
+// one, not measured).
+TEST(LblPipeline, PlanSaysWhereTheMultipleTermIsLeastAccurate) {
+  Scene s = sphere(16, 16);
+  LblPipeline p(test::shared_gpu());
+  auto caveat = [&](Terms terms) {
+    return stage(p.plan(s, {terms, {}}), "view")->reason.find("least accurate") !=
+           std::string::npos;
+  };
+  EXPECT_FALSE(caveat(Terms::All));
+  s.medium.g = 0.8;
+  EXPECT_TRUE(caveat(Terms::All));
+  EXPECT_TRUE(caveat(Terms::Multiple));
+  EXPECT_FALSE(caveat(Terms::Single));
+  s.medium.g = -0.7;
+  EXPECT_FALSE(caveat(Terms::Multiple));
+}
+
 TEST(LblPipeline, CameraOnlyChangeRunsOnlyTheViewPass) {
   Scene s = sphere(24, 24);
   LblPipeline p(test::shared_gpu());
