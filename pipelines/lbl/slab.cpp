@@ -48,13 +48,12 @@ std::pair<double, double> layer_escape(int k, int layers, double d,
   return {up / (2 * d), down / (2 * d)};
 }
 
-// The chances that light emitted evenly over layer k with the HG phase about the beam (cosine
-// mu0 to the normal, travelling into the slab) leaves through the lit face (first) and the other
-// (second) without another interaction: per direction the phase, azimuth summed (phase_up and
-// phase_down, per node of `nodes`), times the layer's mean transmittance to the face.
+// The HG phase about a direction at cosine mu0 to the normal, travelling into the slab (+z),
+// summed over the azimuth at each of mu_nodes(n): `up` for light going back towards the lit face
+// at cosine mu, `down` for light going on.
 struct PhaseNodes {
   std::vector<std::pair<double, double>> nodes;
-  std::vector<double> up, down;  // integral over the azimuth of HG, going up and down at cosine mu
+  std::vector<double> up, down;
 };
 PhaseNodes phase_nodes(double mu0, double g, int n) {
   PhaseNodes p{mu_nodes(n), {}, {}};
@@ -72,6 +71,9 @@ PhaseNodes phase_nodes(double mu0, double g, int n) {
   }
   return p;
 }
+// The chances that light emitted evenly over layer k (of `layers`, each of optical thickness d)
+// by the phase `p` leaves through the lit face (first) and the other (second) without another
+// interaction: per direction the phase times the layer's mean transmittance to the face.
 std::pair<double, double> layer_escape_phase(int k, int layers, double d, const PhaseNodes& p) {
   double up = 0, down = 0;
   double t0 = k * d, t1 = (k + 1) * d, b0 = (layers - 1 - k) * d, b1 = (layers - k) * d;
