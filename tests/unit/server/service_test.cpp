@@ -175,9 +175,12 @@ TEST_F(ServiceTest, CostlyRequestsAreRefusedNamingTheFieldAndTheLimit) {
   auto j = nlohmann::json::parse(r.body());
   EXPECT_EQ(j["field"], "scene.voxels");
   EXPECT_NE(j["error"].get<std::string>().find("--max-request-mb"), std::string::npos) << j.dump();
-  // The amount in whole megabytes ("would need about 12345 MB"), not "1.23e+04".
-  EXPECT_TRUE(
-      std::regex_search(j["error"].get<std::string>(), std::regex("would need about [0-9]{4,} MB")))
+  // The amount and the limit in the summary's units ("would need about 14 GB (...), over this
+  // server's limit of 2.1 GB per request (--max-request-mb 2048)"), not "1.23e+04 MB".
+  EXPECT_TRUE(std::regex_search(
+      j["error"].get<std::string>(),
+      std::regex(R"(would need about [0-9.]+ GB \(reference: .*\), over this server's limit )"
+                 R"(of [0-9.]+ GB per request \(--max-request-mb [0-9]+\)$)")))
       << j.dump();
   r = post("/api/render",
            {{"scene", scene}, {"pipeline", "thickness"}, {"settings", {{"shadow_size", 8192}}}});
