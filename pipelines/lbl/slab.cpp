@@ -33,21 +33,6 @@ std::vector<std::pair<double, double>> mu_nodes(int n) {
   return nodes;
 }
 
-// The chances that isotropic emission spread evenly over layer k (of `layers`, each of optical
-// thickness d) leaves through the lit face (first) and the other (second) without another
-// interaction: (1 / 2 d) integral over the layer of E2(t) dt, with
-// int E2 = (1 / 2) int_0^1 mu (exp(-t0 / mu) - exp(-t1 / mu)) d mu.
-std::pair<double, double> layer_escape(int k, int layers, double d,
-                                       const std::vector<std::pair<double, double>>& nodes) {
-  double up = 0, down = 0;
-  double t0 = k * d, t1 = (k + 1) * d, b0 = (layers - 1 - k) * d, b1 = (layers - k) * d;
-  for (auto [mu, dmu] : nodes) {
-    up += mu * (std::exp(-t0 / mu) - std::exp(-t1 / mu)) * dmu;
-    down += mu * (std::exp(-b0 / mu) - std::exp(-b1 / mu)) * dmu;
-  }
-  return {up / (2 * d), down / (2 * d)};
-}
-
 // The HG phase about a direction at cosine mu0 to the normal, travelling into the slab (+z),
 // summed over the azimuth at each of mu_nodes(n): `up` for light going back towards the lit face
 // at cosine mu, `down` for light going on.
@@ -60,6 +45,11 @@ PhaseNodes phase_nodes(double mu0, double g, int n) {
   const double sin0 = std::sqrt(std::max(0.0, 1 - mu0 * mu0));
   const int azimuths = 256;
   for (auto [mu, dmu] : p.nodes) {
+    if (sin0 == 0) {  // about the normal: the same at every azimuth
+      p.up.push_back(2 * kPi * hg(-mu0 * mu, g));
+      p.down.push_back(2 * kPi * hg(mu0 * mu, g));
+      continue;
+    }
     double sin1 = std::sqrt(std::max(0.0, 1 - mu * mu)), up = 0, down = 0;
     for (int j = 0; j < azimuths; ++j) {
       double c = std::cos(kPi * (j + 0.5) / azimuths);
@@ -73,7 +63,9 @@ PhaseNodes phase_nodes(double mu0, double g, int n) {
 }
 // The chances that light emitted evenly over layer k (of `layers`, each of optical thickness d)
 // by the phase `p` leaves through the lit face (first) and the other (second) without another
-// interaction: per direction the phase times the layer's mean transmittance to the face.
+// interaction: per direction the phase times the layer's mean transmittance to the face. For
+// isotropic emission (phase_nodes(1, 0, n): 1/2 each way) that is (1 / 2 d) integral over the
+// layer of E2(t) dt, with int E2 = (1 / 2) int_0^1 mu (exp(-t0 / mu) - exp(-t1 / mu)) d mu.
 std::pair<double, double> layer_escape_phase(int k, int layers, double d, const PhaseNodes& p) {
   double up = 0, down = 0;
   double t0 = k * d, t1 = (k + 1) * d, b0 = (layers - 1 - k) * d, b1 = (layers - k) * d;
@@ -236,14 +228,15 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   // Escape: per layer, the transport's chance that isotropic emission there leaves without
   // another collision (the delta-Eddington scaled medium) against the lattice's own (1/6 up and
   // 1/6 down through the layers' (1 - pt); sideways packets never leave a periodic column).
-  const auto esc_nodes = mu_nodes(400);
+  const PhaseNodes isotropic = phase_nodes(1, 0, 400);
+  const auto& esc_nodes = isotropic.nodes;
   const double dtau_s = (1 - p.albedo * p.g) * dtau;
   std::vector<float> escape(3 * v.count(), 1.f);
   if (o.escape) {
     const double keep = 1 - coeffs.pt[0];
     std::vector<float> exact(escape.size()), lattice(escape.size());
     for (int k = 0; k < r.layers; ++k) {
-      auto [up, down] = layer_escape(k, r.layers, dtau_s, esc_nodes);
+      auto [up, down] = layer_escape_phase(k, r.layers, dtau_s, isotropic);
       for (int ch = 0; ch < 3; ++ch) {
         exact[3 * k + ch] = static_cast<float>(up + down);
         lattice[3 * k + ch] =
@@ -276,6 +269,7 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
     for (int k = 0; k < r.layers; ++k)
       emitted[k] = std::exp(-k * dtau / p.mu0) * p.albedo * -std::expm1(-dtau / p.mu0);
     std::vector<PhaseNodes> phase(r.layers, phase_nodes(p.mu0, p.g, 200));
+    std::vector<double> escapes(r.layers);  // E per layer of the last order's light
     for (int order = 2; order <= o.orders; ++order) {
       emitted = slab_next_order(emitted, phase, dtau, p.albedo, mean);
       SingleScattering leaves;
@@ -284,6 +278,7 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
         auto [e_up, e_down] = layer_escape_phase(k, r.layers, dtau, phase[k]);
         leaves.R += emitted[k] * e_up;
         leaves.T += emitted[k] * e_down;
+        escapes[k] = e_up + e_down;
       }
       r.orders.push_back(leaves);
     }
@@ -291,9 +286,8 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
     // through the real medium by its phase), emitted isotropically in the scaled medium, whose
     // isotropic emission interacts again 1 - P' of the time (P' as the escape correction's).
     for (int k = 0; k < r.layers; ++k) {
-      auto [e_up, e_down] = layer_escape_phase(k, r.layers, dtau, phase[k]);
-      auto [s_up, s_down] = layer_escape(k, r.layers, dtau_s, esc_nodes);
-      double keep = (1 - e_up - e_down) / std::max(1e-12, 1 - s_up - s_down);
+      auto [s_up, s_down] = layer_escape_phase(k, r.layers, dtau_s, isotropic);
+      double keep = (1 - escapes[k]) / std::max(1e-12, 1 - s_up - s_down);
       for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(emitted[k] * keep);
     }
   } else if (o.second) {
@@ -349,7 +343,7 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
     // irr in the real sigma_s's share; the second scattering in the scaled medium's.
     double e = (irr[3 * k] + (!second.empty() ? second[3 * k] / (1 - p.g) : 0.0)) * view_emit;
     if (!(e > 0)) continue;
-    auto [e_up, e_down] = layer_escape(k, r.layers, view_dtau, esc_nodes);
+    auto [e_up, e_down] = layer_escape_phase(k, r.layers, view_dtau, isotropic);
     R_multiple += e * e_up;
     T_multiple += e * e_down;
   }
