@@ -3,7 +3,6 @@
 #include <algorithm>
 
 #include "pipelines/cost_support.hpp"
-#include "pipelines/reference/cell_triangles.hpp"
 #include "pipelines/reference/reference_pipeline.hpp"
 
 namespace scatter {
@@ -19,7 +18,7 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
   const std::string grid = g.text() + " voxels";
   // Peak while uploading (render: voxelize(), then upload_medium()); the grid lives to the end.
   add_medium_upload(upload, scene, g);
-  const bool march = request.terms == Terms::Single && !s.mc;
+  const bool march = s.marches(request.terms);
   const bool mesh = scene.medium.ior != 1.0 || !s.voxel_boundary;
   // Made before the upload and alive through it where the mesh bounds the medium: the interior
   // depth (a byte a voxel, host and device) and, for a mesh of kCellListsMinTriangles or more
@@ -27,8 +26,7 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
   // computed through a 4-byte-a-voxel distance array whose freed pages stay resident (measured:
   // 16 B a voxel at 146^3 for the sphere, `CostTest.ReferenceTracksMeasuredMemory`).
   const double tris = mesh ? double(scene.mesh->triangle_count()) : 0;
-  const bool cells =
-      mesh && !march && (s.cells == 1 || (s.cells == 2 && tris >= kCellListsMinTriangles));
+  const bool cells = mesh && s.builds_cell_lists(size_t(tris), request.terms);
   if (mesh) {
     upload.host("scene.voxels", n * (cells ? 10 : 5),
                 grid + (cells ? " x 10 B" : " x 5 B") + " (interior depth" +

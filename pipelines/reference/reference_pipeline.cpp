@@ -25,10 +25,6 @@ std::vector<std::string> program(const char* file) {
   return p;
 }
 
-bool marches(const ReferenceSettings& s, Terms terms) {
-  return terms == Terms::Single && !s.mc;
-}
-
 // The batches a standard error is taken from alone at the least (31 degrees of freedom: with 12
 // a pixel's estimate was often several times too small where rare events carry the variance);
 // from 4 to 31 batches the larger of it and the samples' own variance (which usually overstates
@@ -114,7 +110,7 @@ Plan ReferencePipeline::describe(const Scene& scene, Terms terms,
   else
     p.stages.push_back({"boundary", false,
                         "voxel_boundary=1 and index matched (ior 1): the voxelized medium alone"});
-  if (p.stages.back().run && !marches(s, terms)) {
+  if (p.stages.back().run && !s.marches(terms)) {
     const char* queries[] = {
         "; the path tracer's mesh queries traverse the BVH (cells=0)",
         "; the path tracer's mesh queries walk per-voxel triangle lists with the voxel DDA "
@@ -124,7 +120,7 @@ Plan ReferencePipeline::describe(const Scene& scene, Terms terms,
     p.stages.back().reason += queries[std::clamp(s.cells, 0, 2)];
   }
   p.stages.push_back({"upload", true, "medium, per-brick majorants (8^3 voxels), lights, camera"});
-  if (marches(s, terms)) {
+  if (s.marches(terms)) {
     p.stages.push_back(
         {"march", true,
          "deterministic single scattering, step " + std::to_string(s.step) + " voxels"});
@@ -157,14 +153,13 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   CellTriangles cells;
   if (mesh_bounds || dielectric) {
     bvh = build_bvh(*scene.mesh);
-    const bool large = bvh.triangles.size() / 12 >= kCellListsMinTriangles;
-    if ((s.cells == 1 || (s.cells == 2 && large)) && !marches(s, request.terms)) {
+    if (s.builds_cell_lists(bvh.triangles.size() / 12, request.terms)) {
       cells = cell_triangles(grid, bvh);
       if (s.cells == 2 && !uses_cell_lists(cells, bvh)) cells = {};
     }
     clock.stop("boundary");
   }
-  if (s.cells == 2 && (mesh_bounds || dielectric) && !marches(s, request.terms))
+  if (s.cells == 2 && (mesh_bounds || dielectric) && !s.marches(request.terms))
     plan_stage(result.plan, "boundary").reason +=
         cells.triangles.empty() ? ": the BVH" : ": the lists";
 
@@ -185,7 +180,7 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
                           interior.data());
   const int convex = (mesh_bounds || dielectric) && is_convex(*scene.mesh);
   ExitMaps exits;
-  if (convex && s.exit_maps && !marches(s, request.terms)) exits = exit_maps(bvh, scene.lights);
+  if (convex && s.exit_maps && !s.marches(request.terms)) exits = exit_maps(bvh, scene.lights);
   if (exits.header.empty()) exits.header.assign(kExitMapFloats, 0.f);
   cl::Buffer exit_header = upload(cl, exits.header);
   cl::Buffer exit_first = upload_ints(cl, exits.first);
@@ -200,7 +195,7 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   std::vector<int32_t> uniform = uniform_bricks(grid, medium.bricks.brick, mesh_bounds);
   // One coefficient everywhere a segment inside the mesh goes: no walks at all (only where the
   // mesh bounds the medium, so that every tracked segment lies inside it).
-  const int32_t homogeneous = mesh_bounds && s.homogeneous && !marches(s, request.terms)
+  const int32_t homogeneous = mesh_bounds && s.homogeneous && !s.marches(request.terms)
                                   ? homogeneous_voxel(grid, uniform)
                                   : -1;
   if (homogeneous >= 0)
@@ -221,7 +216,7 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   result.image = Image(w, h);
   const int light_count = static_cast<int>(scene.lights.size());
   const float g = static_cast<float>(scene.medium.g);
-  if (marches(s, request.terms)) {
+  if (s.marches(request.terms)) {
     // kernels/reference/single_march.cl keeps two floats per light for the sub-steps' ends.
     if (scene.lights.size() > 16)
       throw ValidationError("scene.lights", "the reference marcher takes at most 16 lights");

@@ -15,6 +15,7 @@
 
 #include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
+#include "pipelines/reference/cell_triangles.hpp"
 
 namespace scatter {
 
@@ -30,6 +31,13 @@ struct ReferenceSettings {
   bool homogeneous = true;  // a constant medium inside the mesh is tracked without walks
   int batch = 0;  // samples per stratified batch (kernels/reference/path.cl); 0: batch_for(spp)
   static ReferenceSettings read(const Settings& settings);
+  // The single term by the deterministic marcher (not mc).
+  bool marches(Terms terms) const { return terms == Terms::Single && !mc; }
+  // Whether a render of a mesh of `triangles` builds the voxels' triangle lists (they are then
+  // used where they pay: uses_cell_lists).
+  bool builds_cell_lists(size_t triangles, Terms terms) const {
+    return (cells == 1 || (cells == 2 && triangles >= kCellListsMinTriangles)) && !marches(terms);
+  }
 };
 
 // The samples per stratified batch when `batch` is 0: the largest power of two up to 16 that
