@@ -16,6 +16,13 @@
 // scaled_view (g_scale = g): the multiple term, the lattice's delta-Eddington scaled light, is
 // gathered as that scaled medium emits and attenuates it: (1 - g) x the irradiance (sigma_s'
 // for sigma_s) through sigma_t' = sigma_t - g sigma_s.
+// tms (with g != 0, the default; Nakajima and Tanaka's TMS correction): the eye sees the
+// delta-Eddington scaled problem the march and the lattice solve, all of it through sigma_t'
+// (the light the real phase's forward peak sends on towards the eye not counted as lost), with
+// that problem's isotropic first scattering replaced by the real phase's: the lattice's and the
+// second scattering's light emitted by sigma_s (1 - g), the scaled beam's (the real beam's and
+// the forward-scattered light's) by sigma_s 4 pi HG. The single term stays the real medium's
+// (through sigma_t); what the same light gains through sigma_t' is the multiple term's.
 
 float single_phase(__global const float* deposit, __global const float* flow, float g, int v,
                    float3 to_eye) {
@@ -27,23 +34,15 @@ float single_phase(__global const float* deposit, __global const float* flow, fl
   return 4.0f * PI * hg_phase(dot(m, to_eye) / len, ge);
 }
 
-float3 single_emission(__global const float* deposit, __global const float* flow, float w_single,
-                       float g, int with_flow, int v, float3 to_eye) {
-  float ws = w_single;
-  if (with_flow && w_single != 0.0f) ws *= single_phase(deposit, flow, g, v, to_eye);
-  return ws * (float3)(deposit[v], deposit[v + 1], deposit[v + 2]);
-}
-
-// One piece of length ds in voxel v: the single term's emission `es` through the real sigma_t
-// (transmittance tr), the multiple term's `em` through sigma_t - g_scale sigma_s (trm) and
-// times (1 - g_scale): with g_scale = g the lattice's similarity-scaled light is seen through
-// the scaled medium too, its forward scattering not counted as loss.
+// One piece of length ds in voxel v: the emission `es` through the real sigma_t (transmittance
+// tr), `em` times emit_scale through sigma_t - g_scale sigma_s (trm), less `sub` through the
+// real sigma_t.
 void gather_piece(__global const float* sigma_t, __global const float* sigma_s, float g_scale,
-                  float3 es, float3 em, int v, float ds, float inv_4pi_v, float3* tr, float3* trm,
-                  float3* radiance) {
+                  float emit_scale, float3 es, float3 em, float3 sub, int v, float ds,
+                  float inv_4pi_v, float3* tr, float3* trm, float3* radiance) {
   float st[3] = {sigma_t[v], sigma_t[v + 1], sigma_t[v + 2]};
   float ss[3] = {sigma_s[v], sigma_s[v + 1], sigma_s[v + 2]};
-  float e1[3] = {es.x, es.y, es.z}, e2[3] = {em.x, em.y, em.z};
+  float e1[3] = {es.x, es.y, es.z}, e2[3] = {em.x, em.y, em.z}, e3[3] = {sub.x, sub.y, sub.z};
   float t[3] = {tr->x, tr->y, tr->z}, tm[3] = {trm->x, trm->y, trm->z};
   float L[3] = {0.0f, 0.0f, 0.0f};
   for (int ch = 0; ch < 3; ++ch) {
@@ -51,7 +50,7 @@ void gather_piece(__global const float* sigma_t, __global const float* sigma_s, 
     float w = x > 1e-4f ? (1.0f - exp(-x)) / st[ch] : ds * (1.0f - 0.5f * x);
     float sm = st[ch] - g_scale * ss[ch], xm = sm * ds;
     float wm = xm > 1e-4f ? (1.0f - exp(-xm)) / sm : ds * (1.0f - 0.5f * xm);
-    L[ch] = (t[ch] * e1[ch] * w + tm[ch] * (1.0f - g_scale) * e2[ch] * wm) * inv_4pi_v;
+    L[ch] = (t[ch] * (e1[ch] - e3[ch]) * w + tm[ch] * emit_scale * e2[ch] * wm) * inv_4pi_v;
     t[ch] *= exp(-x);
     tm[ch] *= exp(-xm);
   }
@@ -60,18 +59,16 @@ void gather_piece(__global const float* sigma_t, __global const float* sigma_s, 
   *trm = (float3)(tm[0], tm[1], tm[2]);
 }
 
-// The multiple term's emission: the lattice's, plus (with_flow) the light the delta-Eddington
-// beam kept forward, scattered with the phase about the light's direction. The lattice's light
-// is isotropic unless g_flux != 0: with its direction m = J / phi per voxel (lattice_flux), a
-// radiance (phi + 3 J . w) / (4 pi) scattered by a phase of first moment g emits
-// (phi + 3 g J . w_out) / (4 pi), so the emission is scaled by 1 + 3 g m . w_out (not below 0).
-// With second (second_scale = 1 / (1 - g), else 0) the second scattering's light Q2 / (1 - g)
-// is added, by the phase about the gather's direction (g_second != 0) or else with the lattice's.
-float3 multiple_emission(__global const float* deposit, __global const float* irr,
-                         __global const float* flow, float w_multiple, float g, int with_flow,
-                         __global const float* lflux, float g_flux, __global const float* second,
-                         __global const float* second_dir, float second_scale, float g_second,
-                         int voxels, int v, float3 to_eye) {
+// The lattice's emission and the second scattering's (in the real sigma_s's share). The
+// lattice's light is isotropic unless g_flux != 0: with its direction m = J / phi per voxel
+// (lattice_flux), a radiance (phi + 3 J . w) / (4 pi) scattered by a phase of first moment g
+// emits (phi + 3 g J . w_out) / (4 pi), so the emission is scaled by 1 + 3 g m . w_out (not
+// below 0). With second (second_scale = 1 / (1 - g), else 0) the second scattering's light
+// Q2 / (1 - g) is added, by the phase about the gather's direction (g_second != 0) or else with
+// the lattice's.
+float3 diffuse_emission(__global const float* irr, __global const float* lflux, float g_flux,
+                        __global const float* second, __global const float* second_dir,
+                        float second_scale, float g_second, int v, float3 to_eye) {
   float3 e = (float3)(irr[v], irr[v + 1], irr[v + 2]);
   float3 q = second_scale * (float3)(second[v], second[v + 1], second[v + 2]);
   if (g_second != 0.0f) {
@@ -84,12 +81,48 @@ float3 multiple_emission(__global const float* deposit, __global const float* ir
     e *= f;
     if (g_second == 0.0f) q *= f;
   }
-  e += q;
-  if (with_flow && w_multiple != 0.0f) {
-    __global const float* extra = flow + 3 * voxels;
-    e += single_phase(deposit, flow, g, v, to_eye) * (float3)(extra[v], extra[v + 1], extra[v + 2]);
+  return e + q;
+}
+
+typedef struct {
+  __global const float* deposit;
+  __global const float* flow;  // with_flow: the light's direction, then the forward-scattered
+  __global const float* irr;
+  __global const float* lflux;
+  __global const float* second;
+  __global const float* second_dir;
+  __global const float* sigma_t;
+  __global const float* sigma_s;
+  float w_single, w_multiple, g, g_flux, second_scale, g_second, g_scale;
+  int with_flow, tms, voxels;
+} ViewInputs;
+
+// One piece of the eye ray (length ds in voxel v, travelling to_eye towards the eye). The
+// multiple term: the lattice's and the second scattering's light, plus (with_flow) the light
+// the delta-Eddington beam kept forward (`extra`), scattered with the phase about the light's
+// direction; with tms as the header says.
+void view_piece(const ViewInputs* in, int v, float3 to_eye, float ds, float inv_4pi_v,
+                float3* tr, float3* trm, float3* radiance) {
+  float phase = in->with_flow ? single_phase(in->deposit, in->flow, in->g, v, to_eye) : 1.0f;
+  float3 single = phase * (float3)(in->deposit[v], in->deposit[v + 1], in->deposit[v + 2]);
+  float3 beam = (float3)(0.0f);
+  if (in->with_flow) {
+    __global const float* extra = in->flow + 3 * in->voxels;
+    beam = phase * (float3)(extra[v], extra[v + 1], extra[v + 2]);
   }
-  return w_multiple * e;
+  float3 diffuse = (float3)(0.0f);
+  if (in->w_multiple != 0.0f)
+    diffuse = diffuse_emission(in->irr, in->lflux, in->g_flux, in->second, in->second_dir,
+                               in->second_scale, in->g_second, v, to_eye);
+  float3 es = in->w_single * single;
+  if (in->tms)
+    gather_piece(in->sigma_t, in->sigma_s, in->g, 1.0f, es,
+                 in->w_multiple * ((1.0f - in->g) * diffuse + beam + single),
+                 in->w_multiple * single, v, ds, inv_4pi_v, tr, trm, radiance);
+  else
+    gather_piece(in->sigma_t, in->sigma_s, in->g_scale, 1.0f - in->g_scale, es,
+                 in->w_multiple * (diffuse + beam), (float3)(0.0f), v, ds, inv_4pi_v, tr, trm,
+                 radiance);
 }
 
 __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
@@ -100,7 +133,7 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
                         __global const float* sigma_s, float g_scale, __global const float* lflux,
                         float g_flux, __global const float* second,
                         __global const float* second_dir, float second_scale, float g_second,
-                        __global const float* camera, int width, int height, int bend,
+                        int tms, __global const float* camera, int width, int height, int bend,
                         float delta, __global float* out) {
   int px = get_global_id(0), py = get_global_id(1);
   if (px >= width || py >= height) return;
@@ -109,6 +142,10 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
   float3 d = camera_ray(cam, px, py, width, height, 0.5f, 0.5f);
   float inv_4pi_v = INV_4PI / (voxel * voxel * voxel);
   float3 tr = (float3)(1.0f), trm = (float3)(1.0f), radiance = (float3)(0.0f);
+  ViewInputs in = {deposit,  flow,       irr,        lflux,        second,
+                   second_dir, sigma_t,  sigma_s,    w_single,     w_multiple,
+                   g_phase,  g_flux,     second_scale, g_second,   g_scale,
+                   with_flow, tms,       nx * ny * nz};
   float t0, t1;
   if (grid_interval(&g, cam.position, d, &t0, &t1)) {
     if (!bend) {
@@ -119,12 +156,7 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
       while (dda_next(&s, &a, &b, &c) && fmax(fmax(tr.x, fmax(tr.y, tr.z)),
                                                fmax(trm.x, fmax(trm.y, trm.z))) > 1e-6f) {
         int v = 3 * voxel_index(&g, c.x, c.y, c.z);
-        gather_piece(sigma_t, sigma_s, g_scale,
-                     single_emission(deposit, flow, w_single, g_phase, with_flow, v, -d),
-                     multiple_emission(deposit, irr, flow, w_multiple, g_phase, with_flow, lflux,
-                                       g_flux, second, second_dir, second_scale, g_second,
-                                       nx * ny * nz, v, -d),
-                     v, b - a, inv_4pi_v, &tr, &trm, &radiance);
+        view_piece(&in, v, -d, b - a, inv_4pi_v, &tr, &trm, &radiance);
       }
     } else {
       float3 x = cam.position + d * t0;
@@ -140,12 +172,7 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
         int3 c = voxel_of(&g, 0.5f * (x0 + x));
         if (!inside_grid(&g, c)) break;
         int k = 3 * voxel_index(&g, c.x, c.y, c.z);
-        float3 e = single_emission(deposit, flow, w_single, g_phase, with_flow, k,
-                                   normalize(x0 - x));
-        float3 em = multiple_emission(deposit, irr, flow, w_multiple, g_phase, with_flow, lflux,
-                                      g_flux, second, second_dir, second_scale, g_second,
-                                      nx * ny * nz, k, normalize(x0 - x));
-        gather_piece(sigma_t, sigma_s, g_scale, e, em, k, ds, inv_4pi_v, &tr, &trm, &radiance);
+        view_piece(&in, k, normalize(x0 - x), ds, inv_4pi_v, &tr, &trm, &radiance);
       }
     }
   }

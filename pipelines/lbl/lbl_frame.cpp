@@ -61,6 +61,10 @@ bool uses_flux_phase(const Scene& scene, const LblSettings& s) {
   return s.flux_phase && scene.medium.g != 0 && s.directions == 6;
 }
 
+bool uses_tms(const Scene& scene, const LblSettings& s) {
+  return s.tms && !s.scaled_view && scene.medium.g != 0;
+}
+
 bool uses_second(const LblSettings& s) {
   return s.second && s.directions == 6 && s.interleave == 0;
 }
@@ -156,28 +160,35 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
                                   : "nothing diffused in this frame"});
   std::string gathers =
       d.single && d.multiple ? "deposit + lattice" : (d.single ? "the deposit" : "the lattice");
-  std::string phase = scene.medium.g != 0
-                          ? "; HG phase (g " + short_number(scene.medium.g) +
-                                ") about the light's direction for the single term and the "
-                                "forward-scattered light" +
-                                (uses_second(s) && s.second_phase
-                                     ? std::string(", about the gather's mean direction for the "
-                                                   "second scattering's light")
-                                     : std::string()) +
-                                ", the lattice's (delta-Eddington scaled) light " +
-                                (uses_flux_phase(scene, s)
-                                     ? std::string("by the phase's first moment about its flux")
-                                     : std::string("isotropic")) +
-                                (s.scaled_view ? " and seen through the scaled medium" : "")
-                          : "";
-  // Where the multiple term is least accurate, and why (docs/BENCHMARKS.md, lbl: the sphere at
-  // g 0.7 11 % on all terms, at g 0.9 26 % beyond the reference's noise; the slab at g 0.75
-  // 10-60 %, its reading of the medium not conservative). Back-scattering media: not measured.
+  std::string phase =
+      scene.medium.g != 0
+          ? "; HG phase (g " + short_number(scene.medium.g) +
+                ") about the light's direction for the single term and the "
+                "forward-scattered light" +
+                (uses_second(s) && s.second_phase
+                     ? std::string(", about the gather's mean direction for the "
+                                   "second scattering's light")
+                     : std::string()) +
+                ", the lattice's (delta-Eddington scaled) light " +
+                (uses_flux_phase(scene, s)
+                     ? std::string("by the phase's first moment about its flux")
+                     : std::string("isotropic")) +
+                (uses_tms(scene, s) ? std::string(" by sigma_s (1 - g); all of the multiple term "
+                                                  "seen through the scaled medium, the single "
+                                                  "term's forward-scattered gain there too (TMS)")
+                 : s.scaled_view    ? std::string(" and seen through the scaled "
+                                                     "medium")
+                                    : std::string())
+          : "";
+  // Where the multiple term is least accurate, and why (docs/BENCHMARKS.md, lbl: with the TMS
+  // reading, spheres at g 0.7 4-14 % on all terms, the thick ones the most, at g 0.9 9 %).
+  // Back-scattering media: not measured.
   const std::string caveat =
       d.multiple && scene.medium.g >= 0.6
           ? "; at g " + short_number(scene.medium.g) +
                 " the multiple term is lbl's least accurate (a delta-Eddington lattice behind "
-                "one exact scattering: measured 10-30 % off at g 0.7-0.9)"
+                "one exact scattering: all terms measured 4-14 % off at g 0.7-0.9, the most "
+                "in optically thick media)"
           : "";
   p.stages.push_back(
       {"view", true,

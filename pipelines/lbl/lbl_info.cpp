@@ -38,6 +38,13 @@ const SettingsTable<LblSettings>& lbl_settings() {
        flag("scaled_view", &S::scaled_view, frame(),
             "1: the view pass gathers the multiple term through the delta-Eddington scaled medium "
             "(sigma_s', sigma_t'), as the lattice carries it; 0: through the real one"),
+       flag("tms", &S::tms, frame(),
+            "with g != 0 and scaled_view 0, 1: the view sees the delta-Eddington scaled problem "
+            "the lattice solves through sigma_t' = sigma_t - g sigma_s, its first scattering by "
+            "the real phase (the TMS correction): the lattice's and the second scattering's light "
+            "emitted by sigma_s (1 - g), the scaled beam's by sigma_s HG, the single term's own "
+            "light's gain through sigma_t' counted in the multiple term; 0: the multiple term "
+            "emitted by sigma_s through the real sigma_t"),
        flag(
            "flux_phase", &S::flux_phase, frame(),
            "1: with g != 0 the lattice's light is scattered towards the eye by 1 + 3 g m . w, m "

@@ -203,7 +203,8 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
       flux_phase ? st.lattice_flux : st.deposit, float(flux_phase ? scene.medium.g : 0.0),
       st.with_second ? st.second : st.deposit, st.with_second ? st.second_dir : st.deposit,
       float(st.with_second ? 1 / (1 - scene.medium.g) : 0.0),
-      float(st.with_second && s.second_phase ? scene.medium.g : 0.0), camera, w, h, d.bend ? 1 : 0,
+      float(st.with_second && s.second_phase ? scene.medium.g : 0.0),
+      lbl::uses_tms(scene, s) ? 1 : 0, camera, w, h, d.bend ? 1 : 0,
       float(s.step * st.volume.voxel), out);
   queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(w, h));
   queue.finish();

@@ -48,7 +48,8 @@ struct LblSettings {
   int escape_stride = 2;
   double escape_far = 4;
   bool scaled_view = false;
-  bool flux_phase = false;
+  bool tms = true;
+  bool flux_phase = true;
   bool second = true;
   bool second_phase = false;
   double tolerance = 1e-3;
