@@ -307,7 +307,9 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
   const int up = 4, down = 5;  // +z, -z
   r.R_lattice = f[(down * 3) * n + 0];
   r.T_lattice = f[(up * 3) * n + (n - 1)] + std::exp(-r.layers * dtau_r / p.mu0) - r.T_direct;
-  // As the pipeline's view pass sees the medium (scaled_view 0, its default): the single
+  // As the pipeline's view pass sees the medium with tms 0 and scaled_view 0 (tms 1, the
+  // pipeline's default, corrects radiance away from the forward peak, which a flux integrates
+  // too: docs/pipelines/lbl.md): the single
   // scattering exactly (HG phase, the real medium); the second scattering (with `second`) and
   // the lattice's scattered power per layer (the third and later events; without `second`, the
   // second and later) emitted isotropically through the real medium, leaving each face with the

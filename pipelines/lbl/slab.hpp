@@ -3,13 +3,14 @@
 // lattice nodes across the slab, periodic sideways, open at both faces. The collimated beam's
 // scattered power per layer (Beer-Lambert along mu0, as the light march computes it) is the
 // lattice's source, or with `second` (the default) the second scattering that power gives,
-// computed exactly per layer. R and T are read as the pipeline's view pass reads the medium by
-// default: the single scattering exactly (quadrature over directions, HG phase), the second
-// scattering and the lattice's scattered power per layer (the third and later events; without
-// `second`, the second and later) emitted isotropically with the transport's escape probability
-// through each face, and with g != 0 the forward-scattered light's scattering by the HG phase.
-// `scaled_view`: the whole slab as the delta-Eddington scaled problem instead. `orders`: the real
-// medium's low orders exactly, the lattice only for the rest (a diagnostic of the lattice's
+// computed exactly per layer. R and T are read as the pipeline's view pass reads the medium with
+// tms 0 (its default TMS reading is a radiance correction away from the forward peak, which a
+// flux integrates): the single scattering exactly (quadrature over directions, HG phase), the
+// second scattering and the lattice's scattered power per layer (the third and later events;
+// without `second`, the second and later) emitted isotropically with the transport's escape
+// probability through each face, and with g != 0 the forward-scattered light's scattering by the HG
+// phase. `scaled_view`: the whole slab as the delta-Eddington scaled problem instead. `orders`: the
+// real medium's low orders exactly, the lattice only for the rest (a diagnostic of the lattice's
 // tail). R_lattice and T_lattice: what the lattice itself lets out through its open faces at
 // steady state (its 6 directions, the orders it carries), for comparison.
 #pragma once
