@@ -170,14 +170,14 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
                                    "second scattering's light")
                      : std::string()) +
                 ", the lattice's (delta-Eddington scaled) light " +
+                (uses_tms(scene, s) ? std::string("emitted by sigma_s (1 - g), ") : std::string()) +
                 (uses_flux_phase(scene, s)
-                     ? std::string("by the phase's first moment about its flux")
-                     : std::string("isotropic")) +
-                (uses_tms(scene, s) ? std::string(" by sigma_s (1 - g); all of the multiple term "
-                                                  "seen through the scaled medium, the single "
-                                                  "term's forward-scattered gain there too (TMS)")
-                 : s.scaled_view    ? std::string(" and seen through the scaled "
-                                                     "medium")
+                     ? std::string("scattered by the phase's first moment about its flux")
+                     : std::string("isotropically")) +
+                (uses_tms(scene, s) ? std::string("; the whole multiple term seen through the "
+                                                  "scaled medium, with what the single term's "
+                                                  "light gains there (TMS)")
+                 : s.scaled_view    ? std::string(" and seen through the scaled medium")
                                     : std::string())
           : "";
   // Where the multiple term is least accurate, and why (docs/BENCHMARKS.md, lbl: with the TMS
