@@ -16,7 +16,7 @@
 // scaled_view (g_scale = g): the multiple term, the lattice's delta-Eddington scaled light, is
 // gathered as that scaled medium emits and attenuates it: (1 - g) x the irradiance (sigma_s'
 // for sigma_s) through sigma_t' = sigma_t - g sigma_s.
-// tms (with g != 0, the default; Nakajima and Tanaka's TMS correction): the eye sees the
+// tms (with g > 0, the default; Nakajima and Tanaka's TMS correction): the eye sees the
 // delta-Eddington scaled problem the march and the lattice solve, all of it through sigma_t'
 // (the light the real phase's forward peak sends on towards the eye not counted as lost), with
 // that problem's isotropic first scattering replaced by the real phase's: the lattice's and the

@@ -62,7 +62,9 @@ bool uses_flux_phase(const Scene& scene, const LblSettings& s) {
 }
 
 bool uses_tms(const Scene& scene, const LblSettings& s) {
-  return s.tms && !s.scaled_view && scene.medium.g != 0;
+  // Only a forward peak is a truncation: with g < 0 sigma_t' exceeds sigma_t and the single
+  // term's "gain" through it would be a loss (a negative multiple term).
+  return s.tms && !s.scaled_view && scene.medium.g > 0;
 }
 
 bool uses_second(const LblSettings& s) {

@@ -52,7 +52,7 @@ struct State {
 // (setting flux_phase; the 6-direction lattice's flux only).
 bool uses_flux_phase(const Scene& scene, const LblSettings& s);
 // The view sees the scaled problem through sigma_t' with its first scattering by the real phase
-// (setting tms; g != 0, not with scaled_view).
+// (setting tms; g > 0, not with scaled_view).
 bool uses_tms(const Scene& scene, const LblSettings& s);
 // The lattice starts from the light's exactly computed second scattering (setting second; the
 // 6-direction lattice, not interleaved with the march).

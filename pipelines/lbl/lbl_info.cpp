@@ -39,7 +39,7 @@ const SettingsTable<LblSettings>& lbl_settings() {
             "1: the view pass gathers the multiple term through the delta-Eddington scaled medium "
             "(sigma_s', sigma_t'), as the lattice carries it; 0: through the real one"),
        flag("tms", &S::tms, frame(),
-            "with g != 0 and scaled_view 0, 1: the view sees the delta-Eddington scaled problem "
+            "with g > 0 and scaled_view 0, 1: the view sees the delta-Eddington scaled problem "
             "the lattice solves through sigma_t' = sigma_t - g sigma_s, its first scattering by "
             "the real phase (the TMS correction): the lattice's and the second scattering's light "
             "emitted by sigma_s (1 - g), the scaled beam's by sigma_s HG, the single term's own "

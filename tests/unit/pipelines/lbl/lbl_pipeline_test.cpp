@@ -189,6 +189,13 @@ TEST(LblPipeline, TmsViewBringsAForwardScatteringSphereNearer) {
   EXPECT_EQ(stage(at0.plan, "view")->reason.find("(TMS)"), std::string::npos);
   Image at0_real = lbl.render(s, {Terms::All, {{"tms", 0}}}).image;
   EXPECT_EQ(at0.image.rgb, at0_real.rgb);
+
+  // Back-scattering: no forward peak to truncate, so not read that way (sigma_t' > sigma_t would
+  // make the single term's gain a loss: the stress suite's g -0.99 box went negative).
+  s.medium.g = -0.99;
+  RenderResult back = lbl.render(s, {Terms::Multiple, {}});
+  EXPECT_EQ(stage(back.plan, "view")->reason.find("(TMS)"), std::string::npos);
+  for (float x : back.image.rgb) ASSERT_TRUE(std::isfinite(x) && x >= 0.f);
 }
 
 // A strongly forward-scattering medium's plan says that its multiple term is lbl's least
