@@ -42,8 +42,11 @@ double part_seconds(const Scene& scene, const WayPart& part, const Settings& set
 // layers of contrast 10 within 22.5 %, 15 and 30 at 27-28 %; the target is 25 %).
 constexpr double kPsfMaxContrast = 12;
 
-// lbl's multiple term is not sent media more forward-scattering than this (measured to g 0.9).
+// lbl's multiple term is not sent media more forward-scattering than this (measured to g 0.9),
+// nor more back-scattering than kLblMinG (docs/BENCHMARKS.md: the sphere at g -0.3 8 % on all
+// terms, at g -0.7 35 %).
 constexpr double kLblMaxG = 0.9;
+constexpr double kLblMinG = -0.3;
 
 // Why a way cannot render this scene at all, or empty.
 std::string unfit(const Way& way, const SceneClass& c) {
@@ -66,6 +69,10 @@ std::string unfit(const Way& way, const SceneClass& c) {
     if (p.pipeline == "lbl" && p.terms != Terms::Single && c.g > kLblMaxG)
       return "lbl: g " + short_number(c.g) + " above " + short_number(kLblMaxG) +
              ", past what its multiple term was measured at";
+    if (p.pipeline == "lbl" && p.terms != Terms::Single && c.g < kLblMinG)
+      return "lbl: g " + short_number(c.g) + " below " + short_number(kLblMinG) +
+             ", where its multiple term is off by more than 10 % (measured 35 % at g -0.7: no "
+             "forward peak for its delta-Eddington lattice to keep)";
   }
   return "";
 }

@@ -183,14 +183,20 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
                                     : std::string())
           : "";
   // Where the multiple term is least accurate, and why (docs/BENCHMARKS.md, lbl: with the TMS
-  // reading, spheres at g 0.7 4-14 % on all terms, the thick ones the most, at g 0.9 9 %).
-  // Back-scattering media: not measured.
+  // reading, spheres at g 0.7 4-14 % on all terms, the thick ones the most, at g 0.9 9 %; at
+  // g -0.3 8 %, at g -0.7 35 %).
   const std::string caveat =
-      d.multiple && scene.medium.g >= 0.6
+      !d.multiple ? ""
+      : scene.medium.g >= 0.6
           ? "; at g " + short_number(scene.medium.g) +
                 " the multiple term is lbl's least accurate (a delta-Eddington lattice behind "
                 "one exact scattering: all terms measured 4-14 % off at g 0.7-0.9, the most "
                 "in optically thick media)"
+      : scene.medium.g < -0.3
+          ? "; at g " + short_number(scene.medium.g) +
+                " the multiple term is lbl's least accurate (back-scattering, no forward peak "
+                "for the delta-Eddington lattice to keep: all terms measured 35 % off at g "
+                "-0.7, 8 % at g -0.3)"
           : "";
   p.stages.push_back(
       {"view", true,

@@ -197,6 +197,15 @@ TEST(Planner, KeepsLblAwayFromStronglyForwardScatteringMedia) {
     said +=
         o.pipeline.find("lbl") != std::string::npos && o.note.find("g 0.95") != std::string::npos;
   EXPECT_EQ(said, 2);  // lbl:normal and thickness:normal+lbl:normal
+  // Nor a strongly back-scattering one (measured 35 % off at g -0.7).
+  BudgetChoice back =
+      plan_budget(sphere_scene(0.9, 4, -0.7), Terms::All, Budget{0.20}, {}, table());
+  for (const WayPart& p : back.way.parts) EXPECT_NE(p.pipeline, "lbl");
+  int said_back = 0;
+  for (const PlanOption& o : back.alternatives)
+    said_back += o.pipeline.find("lbl") != std::string::npos &&
+                 o.note.find("below -0.3") != std::string::npos;
+  EXPECT_GE(said_back, 2);
   // At g 0.9 lbl is a candidate again (the table decides).
   BudgetChoice mild = plan_budget(sphere_scene(0.9, 4, 0.9), Terms::All, Budget{0.10}, {}, table());
   for (const PlanOption& o : mild.alternatives) {

@@ -198,9 +198,9 @@ TEST(LblPipeline, TmsViewBringsAForwardScatteringSphereNearer) {
   for (float x : back.image.rgb) ASSERT_TRUE(std::isfinite(x) && x >= 0.f);
 }
 
-// A strongly forward-scattering medium's plan says that its multiple term is lbl's least
-// accurate; the single term alone, or a g 0 medium, says nothing of it (nor a back-scattering
-// one, not measured).
+// A strongly forward- or back-scattering medium's plan says that its multiple term is lbl's
+// least accurate; the single term alone, or a g 0 or mildly back-scattering medium, says
+// nothing of it.
 TEST(LblPipeline, PlanSaysWhereTheMultipleTermIsLeastAccurate) {
   Scene s = sphere(16, 16);
   LblPipeline p(test::shared_gpu());
@@ -214,6 +214,9 @@ TEST(LblPipeline, PlanSaysWhereTheMultipleTermIsLeastAccurate) {
   EXPECT_TRUE(caveat(Terms::Multiple));
   EXPECT_FALSE(caveat(Terms::Single));
   s.medium.g = -0.7;
+  EXPECT_TRUE(caveat(Terms::Multiple));
+  EXPECT_FALSE(caveat(Terms::Single));
+  s.medium.g = -0.3;
   EXPECT_FALSE(caveat(Terms::Multiple));
 }
 
