@@ -7,6 +7,7 @@
 #include "core/errors.hpp"
 #include "pipelines/auto_pipeline.hpp"
 #include "pipelines/cost.hpp"
+#include "pipelines/lbl/lbl_limits.hpp"
 #include "pipelines/registry.hpp"
 
 namespace scatter {
@@ -42,11 +43,9 @@ double part_seconds(const Scene& scene, const WayPart& part, const Settings& set
 // layers of contrast 10 within 22.5 %, 15 and 30 at 27-28 %; the target is 25 %).
 constexpr double kPsfMaxContrast = 12;
 
-// lbl's multiple term is not sent media more forward-scattering than this (measured to g 0.9),
-// nor more back-scattering than kLblMinG (docs/BENCHMARKS.md: the sphere at g -0.3 8 % on all
-// terms, at g -0.7 35 %).
-constexpr double kLblMaxG = 0.9;
-constexpr double kLblMinG = -0.3;
+// lbl's multiple term is sent only media of g in its measured range (pipelines/lbl/lbl_limits.hpp).
+constexpr double kLblMaxG = lbl::kMultipleMeasuredMaxG;
+constexpr double kLblMinG = lbl::kMultipleMeasuredMinG;
 
 // Why a way cannot render this scene at all, or empty.
 std::string unfit(const Way& way, const SceneClass& c) {

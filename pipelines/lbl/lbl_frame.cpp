@@ -3,6 +3,7 @@
 #include "bake/cache.hpp"
 #include "core/errors.hpp"
 #include "pipelines/asset_key.hpp"
+#include "pipelines/lbl/lbl_limits.hpp"
 
 namespace scatter::lbl {
 namespace {
@@ -192,7 +193,7 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
                 " the multiple term is lbl's least accurate (a delta-Eddington lattice behind "
                 "one exact scattering: all terms measured 4-14 % off at g 0.7-0.9, the most "
                 "in optically thick media)"
-      : scene.medium.g < -0.3
+      : scene.medium.g < kMultipleMeasuredMinG
           ? "; at g " + short_number(scene.medium.g) +
                 " the multiple term is lbl's least accurate (back-scattering, no forward peak "
                 "for the delta-Eddington lattice to keep: all terms measured 35 % off at g "
