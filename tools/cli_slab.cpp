@@ -80,6 +80,10 @@ Handler add_slab_command(CLI::App& app) {
                   "lbl: 1 reads the whole slab as the delta-Eddington scaled problem; 0 as the "
                   "pipeline's view pass reads the medium by default")
       ->capture_default_str();
+  cmd->add_option("--gathers", o->lbl.gathers,
+                  "lbl, with --second 1: the orders 2 to N + 1 gathered exactly, the third and "
+                  "later at half resolution (the pipeline's setting `gathers`)")
+      ->capture_default_str();
   cmd->add_option("--orders", o->lbl.orders,
                   "lbl: N in [2, 32] computes the real medium's orders 2 to N exactly and starts "
                   "the lattice from order N's light (a diagnostic); 0: off")

@@ -122,3 +122,54 @@ __kernel void second_interpolate(float3 origin, float voxel, int nx, int ny, int
   vstore3((1.0f - g) * vload3(i, sigma_s) * phi, i, out);
   vstore3(m, i, mout);
 }
+
+// The next order on a coarser grid (setting `gathers`, pipelines/lbl/second.cpp): phi V at the
+// listed cells' centres of the (cx, cy, cz) grid of side `cell` (each cell the mean of the
+// voxels it covers: second_coarse, applied once per halving), from its source through its mean
+// sigma_t', every ray on that grid.
+__kernel void second_coarse_gather(float3 origin, float cell, int cx, int cy, int cz,
+                                   __global const float* coarse_t,
+                                   __global const float* coarse_source, __global const float* dirs,
+                                   int count, __global const int* list, int listed,
+                                   __global float* coarse_phi) {
+  int id = get_global_id(0);
+  if (id >= listed) return;
+  Grid cg = make_grid(origin, cell, cx, cy, cz, 1, 0, 0, 0);
+  int s = list[id];
+  int3 c = (int3)(s % cx, (s / cx) % cy, s / (cx * cy));
+  float3 m;
+  vstore3(second_at(&cg, c, coarse_t, coarse_source, &cg, coarse_t, coarse_source, 0.0f, dirs,
+                    count, &m),
+          s, coarse_phi);
+}
+
+// The next order per voxel from the coarse cells' phi V (`factor` voxels a cell per axis),
+// trilinear between the cells' centres (clamped at the grid's ends): out = sigma_s' phi V, and
+// sum += out.
+__kernel void second_from_coarse(int nx, int ny, int nz, int factor, int cx, int cy, int cz,
+                                 __global const float* coarse_phi, __global const float* sigma_s,
+                                 float g, __global float* out, __global float* sum) {
+  int3 c = (int3)(get_global_id(0), get_global_id(1), get_global_id(2));
+  if (c.x >= nx || c.y >= ny || c.z >= nz) return;
+  int i = (c.z * ny + c.y) * nx + c.x;
+  float3 ss = vload3(i, sigma_s);
+  float3 q = (float3)(0.0f);
+  if (ss.x > 0.0f || ss.y > 0.0f || ss.z > 0.0f) {
+    int3 cn = (int3)(cx, cy, cz);
+    // Voxel centre i + 1/2 sits at (i + 1/2) / factor - 1/2 in the cells' centre coordinates.
+    float3 u = clamp((convert_float3(c) + 0.5f) / (float)factor - 0.5f, (float3)(0.0f),
+                     convert_float3(cn - 1));
+    int3 c0 = min(convert_int3(u), cn - 1), c1 = min(c0 + 1, cn - 1);
+    float3 f = u - convert_float3(c0);
+    float3 phi = (float3)(0.0f);
+    for (int o = 0; o < 8; ++o) {
+      int3 b = (int3)(o & 1, (o >> 1) & 1, (o >> 2) & 1);
+      int3 q3 = select(c0, c1, b == 1);
+      float3 w3 = select(1.0f - f, f, b == 1);
+      phi += w3.x * w3.y * w3.z * vload3((q3.z * cy + q3.y) * cx + q3.x, coarse_phi);
+    }
+    q = (1.0f - g) * ss * phi;
+  }
+  vstore3(q, i, out);
+  vstore3(vload3(i, sum) + q, i, sum);
+}

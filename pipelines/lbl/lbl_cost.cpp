@@ -30,13 +30,17 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
   //   24 B and (flux_phase, 6 directions) the lattice's flux 12 B; the second scattering's
   //   gather (second.cpp, 6 directions, not interleaved) sigma_t' 12 B, its half-resolution grid
   //   and source 3 B, the sampling's mode 1 B, samples, their directions and list 3.5 B, second and
-  //   its direction 24 B (host: sigma_t' and the sampling, 13 B).
+  //   its direction 24 B (host: sigma_t' and the sampling, 13 B); with gathers > 1 the last
+  //   order 12 B and the half-resolution grid's sigma_t', source, phi V and cell list 5 B (host:
+  //   its sigma_t', sums and list, 5 B).
   // Measured RSS: 72^3 346 MB, 104^3 628 MB (estimates 370, 671 with ~220 MB of contexts).
   const bool second = s.second && d == 6 && s.interleave == 0 && request.terms != Terms::Single;
-  double host = kGridBytes + 44 + 72 + (second ? 13 : 0);
-  double device =
-      40 + 36 * (d == 18 ? 2 : 1) + 24 + 2 * 12 * d + (s.blocked ? 144.0 / s.block : 0) + 12 +
-      (scene.medium.g != 0 ? 12 + 24 + (d == 6 && s.flux_phase ? 12 : 0) : 0) + (second ? 43.5 : 0);
+  const bool orders = second && s.gathers > 1;
+  double host = kGridBytes + 44 + 72 + (second ? 13 : 0) + (orders ? 5 : 0);
+  double device = 40 + 36 * (d == 18 ? 2 : 1) + 24 + 2 * 12 * d +
+                  (s.blocked ? 144.0 / s.block : 0) + 12 +
+                  (scene.medium.g != 0 ? 12 + 24 + (d == 6 && s.flux_phase ? 12 : 0) : 0) +
+                  (second ? 43.5 : 0) + (orders ? 17 : 0);
   l.host("scene.voxels", n * host,
          grid + " x " + short_number(host) + " B (grid, volume, coefficients)");
   l.device("scene.voxels", n * device,
@@ -97,6 +101,16 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
       l.time("settings.second", t,
              "the second scattering's gather over " + grid + " (escape_stride " +
                  std::to_string(s.escape_stride) + ", escape_far " + short_number(far) + ")");
+      // The later orders (setting gathers), each on the half-resolution grid at every cell near
+      // the medium: measured 0.14-0.47x the gather's time at the defaults each (bunny, layers,
+      // cube-torus, sphere at g 0.7), taken as 0.45x of its model at the defaults.
+      if (orders) {
+        const double each = 0.45 * n * side_voxels * 60e-9;
+        kept += each * (s.gathers - 1);
+        l.time("settings.gathers", each * (s.gathers - 1),
+               "orders 3 to " + std::to_string(s.gathers + 1) +
+                   " gathered on the half-resolution grid");
+      }
     }
   }
   // View: a ray a pixel through the grid; measured 4096 px x 250 steps 66 ms (65 ns a step).

@@ -96,7 +96,8 @@ Decision decide(const State* state, const Scene& scene, const RenderRequest& req
   d.tiny = d.bound < s.skip_multiple;
   d.diffuse = d.multiple && !d.tiny &&
               (d.march || !state->diffused || state->diffusion != diffusion_key(s));
-  d.gather = d.diffuse && uses_second(s) && (d.march || !state->second_current);
+  d.gather = d.diffuse && uses_second(s) &&
+             (d.march || !state->second_current || state->second_gathers != s.gathers);
   return d;
 }
 
@@ -125,7 +126,11 @@ StagePlan diffuse_stage(const Decision& d, const LblSettings& s) {
                      (s.escape_stride > 1 ? " at one voxel in " + std::to_string(s.escape_stride) +
                                                 " per axis as the escape correction"
                                           : std::string(" at every voxel")) +
-                     " (the lattice carries the third and later events)"
+                     (s.gathers > 1
+                          ? ", the orders 3 to " + std::to_string(s.gathers + 1) +
+                                " each gathered from the last at half resolution (the lattice "
+                                "carries the later events)"
+                          : std::string(" (the lattice carries the third and later events)"))
                : std::string());
   return {"diffuse", d.diffuse, why};
 }

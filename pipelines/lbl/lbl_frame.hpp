@@ -38,9 +38,12 @@ struct State {
                               // when first used
   bool flux_current = false;  // lattice_flux is the last diffusion's
   std::unique_ptr<SecondScatter> gather;  // setting second: its gather, made when first used
-  cl::Buffer second;            // setting second: the light's second scattering (3 per voxel)
-  cl::Buffer second_dir;        // and the mean direction its light travels in (3 per voxel)
-  bool second_current = false;  // second and second_dir are the gather of the loaded deposit
+  cl::Buffer second;      // setting second: the light's second scattering (3 per voxel), with
+                          // gathers > 1 the orders 2 to gathers + 1 summed (what the view adds)
+  cl::Buffer second_dir;  // and the mean direction the second's light travels in (3 per voxel)
+  cl::Buffer last;        // gathers > 1: the last gathered order (the lattice's source)
+  bool second_current = false;  // second, second_dir and last are the gathers of the loaded
+  int second_gathers = 0;       // deposit, by this many gathers
   double max_sigma_s = 0;
   // The lattice has converged for the loaded deposit and settings; with_second: from the second
   // scattering (it carried the third and later events; the view adds second's light). Both

@@ -1,4 +1,5 @@
 // `lbl` in the registry: its settings table and description.
+#include "pipelines/lbl/lbl_limits.hpp"
 #include "pipelines/lbl/lbl_pipeline.hpp"
 #include "pipelines/registry.hpp"
 #include "protocol/json_reader.hpp"
@@ -59,6 +60,11 @@ const SettingsTable<LblSettings>& lbl_settings() {
             "with second and g != 0, 1: the second scattering's light is scattered towards the "
             "eye by HG(g |m|) about m, the mean direction the gather found it arriving in (the "
             "single term's model); 0: isotropically"),
+       setting("gathers", &S::gathers, 1, lbl::kMaxGathers, kept("diffusion"),
+               "with second, the scattering orders 2 to n + 1 computed exactly: the second by the "
+               "gather, each later one gathered from the last over the same directions on the "
+               "grid of half the resolution; the lattice carries the later events (1: the second "
+               "alone)"),
        setting("tolerance", &S::tolerance, 1e-6, 0.5, kept("diffusion"),
                "relative change per check that ends the diffusion"),
        setting("max_steps", &S::max_steps, 1, 1000000, kept("diffusion"),

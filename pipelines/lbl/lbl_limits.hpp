@@ -9,4 +9,8 @@ namespace scatter::lbl {
 constexpr double kMultipleMeasuredMaxG = 0.9;  // nothing sharper measured
 constexpr double kMultipleMeasuredMinG = -0.3;
 
+// The setting `gathers` (the scattering orders computed exactly after the first) at most, the
+// slab's too (pipelines/lbl/slab.hpp).
+constexpr int kMaxGathers = 8;
+
 }  // namespace scatter::lbl

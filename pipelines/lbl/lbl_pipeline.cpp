@@ -144,16 +144,22 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
         st.second = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, bytes);
         st.second_dir = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, bytes);
       }
+      if (s.gathers > 1 && !st.last()) st.last = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, bytes);
       st.second_current = false;
       // The gather reports the first half of the progress, the lattice's steps the second.
       std::function<void(double)> progress;
       if (request.progress) progress = [&](double f) { request.progress(0.5 * f); };
       st.gather->run(st.source, st.second, st.second_dir, progress);
+      // The later orders: each from the last (st.second holds the second until the first of
+      // them has read it), summed into st.second.
+      for (int k = 2; k <= s.gathers; ++k)
+        st.gather->next_order(k == 2 ? st.second : st.last, st.last, st.second);
       queue.finish();
       st.second_current = true;
+      st.second_gathers = s.gathers;
       clock.stop("second");
     }
-    st.lattice->set_source(with_second ? st.second : st.source);
+    st.lattice->set_source(!with_second ? st.source : s.gathers > 1 ? st.last : st.second);
     std::function<void(double)> progress = request.progress;
     if (with_second && request.progress)
       progress = [&](double f) { request.progress(0.5 + 0.5 * f); };

@@ -6,7 +6,8 @@
 //   march    light rays from every light deposit the power they scatter per voxel, bending by
 //            the ray equation where n varies (kernels/lbl/march.cl)
 //   second   the light's second scattering gathered exactly from the deposit (setting second,
-//            pipelines/lbl/second, kernels/lbl/second.cl)
+//            pipelines/lbl/second, kernels/lbl/second.cl), and with setting gathers the next
+//            orders from it on the half-resolution grid
 //   diffuse  lattice-Boltzmann diffusion of it (or of the deposit; global or in blocks), to
 //            convergence, warm-started from the last state (pipelines/lbl/lattice,
 //            kernels/lbl/lattice.cl)
@@ -52,6 +53,7 @@ struct LblSettings {
   bool flux_phase = true;
   bool second = true;
   bool second_phase = false;
+  int gathers = 3;
   double tolerance = 1e-3;
   int max_steps = 20000;
   int check_every = 16;

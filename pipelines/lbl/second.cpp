@@ -9,19 +9,36 @@
 namespace scatter::lbl {
 
 namespace {
+// The mean of each 2 x 2 x 2 cell of a grid of `n` (3 channels; voxels past the high end count
+// 0, as coarse_sigma's); `n` becomes the cells' grid.
+std::vector<float> halve(const std::vector<float>& f, std::array<int, 3>& n) {
+  const int cx = (n[0] + 1) / 2, cy = (n[1] + 1) / 2, cz = (n[2] + 1) / 2;
+  std::vector<double> sum(3 * size_t(cx) * cy * cz, 0.0);
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        size_t cell = (size_t(k / 2) * cy + j / 2) * cx + i / 2;
+        size_t voxel = (size_t(k) * n[1] + j) * n[0] + i;
+        for (int ch = 0; ch < 3; ++ch) sum[3 * cell + ch] += f[3 * voxel + ch] / 8.0;
+      }
+  n = {cx, cy, cz};
+  return std::vector<float>(sum.begin(), sum.end());
+}
+
 cl::Program& second_program(gpu::ClContext& cl) {
   return cl.program(with_cl_library({"kernels/lbl/escape.cl", "kernels/lbl/second.cl"}));
 }
 }  // namespace
 
 SecondScatter::SecondScatter(gpu::ClContext& cl, const Volume& v, const ClVolume& device, double g,
-                             int stride, double far, int directions)
+                             int stride, double far, int directions, int order_level)
     : cl_(cl),
       v_(device),
       g_(g),
       far_(stride > 1 ? far : 0),
       stride_(stride),
-      directions_(directions) {
+      directions_(directions),
+      order_level_(order_level) {
   std::vector<float> scaled(v.sigma_t.size());
   for (size_t i = 0; i < scaled.size(); ++i)
     scaled[i] = static_cast<float>(v.sigma_t[i] - g * v.sigma_s[i]);
@@ -54,6 +71,78 @@ SecondScatter::SecondScatter(gpu::ClContext& cl, const Volume& v, const ClVolume
   const size_t sample_floats = std::max<size_t>(1, 3 * size_t(n_[0]) * n_[1] * n_[2]);
   samples_ = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, sample_floats * sizeof(float));
   msamples_ = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, sample_floats * sizeof(float));
+  // next_order()'s grid: `order_level` halvings of the voxels, its cells' mean sigma_t', and the
+  // cells within one cell of a cell holding a scattering voxel (the trilinear reads of a voxel's
+  // centre stay within one cell of its own).
+  std::vector<float> level_t = scaled;
+  std::array<int, 3> ln = {v.nx, v.ny, v.nz};
+  for (int l = 0; l < order_level_; ++l) level_t = halve(level_t, ln);
+  level_n_ = ln;
+  const size_t cells = size_t(ln[0]) * ln[1] * ln[2];
+  std::vector<char> scatters(cells, 0), needed(cells, 0);
+  for (int k = 0; k < v.nz; ++k)
+    for (int j = 0; j < v.ny; ++j)
+      for (int i = 0; i < v.nx; ++i) {
+        size_t voxel = v.index(i, j, k);
+        if (v.sigma_s[3 * voxel] > 0 || v.sigma_s[3 * voxel + 1] > 0 ||
+            v.sigma_s[3 * voxel + 2] > 0)
+          scatters[(size_t(k >> order_level_) * ln[1] + (j >> order_level_)) * ln[0] +
+                   (i >> order_level_)] = 1;
+      }
+  for (int k = 0; k < ln[2]; ++k)
+    for (int j = 0; j < ln[1]; ++j)
+      for (int i = 0; i < ln[0]; ++i) {
+        if (!scatters[(size_t(k) * ln[1] + j) * ln[0] + i]) continue;
+        for (int c = std::max(0, k - 1); c <= std::min(ln[2] - 1, k + 1); ++c)
+          for (int b = std::max(0, j - 1); b <= std::min(ln[1] - 1, j + 1); ++b)
+            for (int a = std::max(0, i - 1); a <= std::min(ln[0] - 1, i + 1); ++a)
+              needed[(size_t(c) * ln[1] + b) * ln[0] + a] = 1;
+      }
+  std::vector<cl_int> list;
+  for (size_t c = 0; c < cells; ++c)
+    if (needed[c]) list.push_back(static_cast<cl_int>(c));
+  level_listed_ = list.size();
+  sigma_s_ = device.sigma_s;
+  level_t_ = upload(cl, level_t);
+  level_list_ =
+      cl::Buffer(cl.context(), CL_MEM_READ_ONLY, std::max<size_t>(1, list.size()) * sizeof(cl_int));
+  if (!list.empty())
+    cl.queue().enqueueWriteBuffer(level_list_, CL_TRUE, 0, list.size() * sizeof(cl_int),
+                                  list.data());
+  // Every level's source (level 1 is the far field's coarse_source_), and the cells' phi V.
+  ln = {v.nx, v.ny, v.nz};
+  for (int l = 1; l <= order_level_; ++l) {
+    ln = {(ln[0] + 1) / 2, (ln[1] + 1) / 2, (ln[2] + 1) / 2};
+    level_sources_.emplace_back(cl.context(), CL_MEM_READ_WRITE,
+                                3 * size_t(ln[0]) * ln[1] * ln[2] * sizeof(float));
+  }
+  level_phi_ = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 3 * cells * sizeof(float));
+  cl.queue().enqueueFillBuffer(level_phi_, 0.f, 0, 3 * cells * sizeof(float));
+}
+
+void SecondScatter::next_order(const cl::Buffer& source, cl::Buffer& out, cl::Buffer& sum) {
+  cl::Program& program = second_program(cl_);
+  auto& queue = cl_.queue();
+  std::array<int, 3> ln = {v_.nx, v_.ny, v_.nz};
+  const cl::Buffer* from = &source;
+  for (cl::Buffer& to : level_sources_) {
+    cl::Kernel average(program, "second_coarse");
+    gpu::set_args(average, ln[0], ln[1], ln[2], *from, to);
+    ln = {(ln[0] + 1) / 2, (ln[1] + 1) / 2, (ln[2] + 1) / 2};
+    queue.enqueueNDRangeKernel(average, cl::NullRange, cl::NDRange(ln[0], ln[1], ln[2]));
+    from = &to;
+  }
+  const int factor = 1 << order_level_;
+  if (level_listed_ > 0) {
+    cl::Kernel gather(program, "second_coarse_gather");
+    gpu::set_args(gather, v_.origin, float(v_.voxel * factor), ln[0], ln[1], ln[2], level_t_, *from,
+                  dirs_, directions_, level_list_, cl_int(level_listed_), level_phi_);
+    queue.enqueueNDRangeKernel(gather, cl::NullRange, cl::NDRange(level_listed_));
+  }
+  cl::Kernel back(program, "second_from_coarse");
+  gpu::set_args(back, v_.nx, v_.ny, v_.nz, factor, ln[0], ln[1], ln[2], level_phi_, sigma_s_,
+                float(g_), out, sum);
+  queue.enqueueNDRangeKernel(back, cl::NullRange, cl::NDRange(v_.nx, v_.ny, v_.nz));
 }
 
 void SecondScatter::run(const cl::Buffer& source, cl::Buffer& out, cl::Buffer& direction,

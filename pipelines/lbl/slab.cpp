@@ -7,6 +7,7 @@
 #include "core/errors.hpp"
 #include "pipelines/lbl/escape.hpp"
 #include "pipelines/lbl/lattice.hpp"
+#include "pipelines/lbl/second.hpp"
 
 namespace scatter::lbl {
 namespace {
@@ -147,6 +148,30 @@ std::vector<double> slab_next_order(const std::vector<double>& emitted,
   return next;
 }
 
+// The next order on layers `factor` times as thick (the pipeline's coarse gathers, setting
+// `gathers`): the power per layer `q` summed per group of `factor` layers (a whole number of
+// groups), the next order's events per group by slab_second, and per layer its group's share,
+// linear between the groups' centres (the pipeline's trilinear fluence: sigma_s' is the same in
+// every layer here).
+std::vector<float> slab_next_coarse(const std::vector<float>& q, int layers, int factor, double d,
+                                    double a, const std::vector<std::pair<double, double>>& nodes) {
+  const int groups = layers / factor;
+  std::vector<float> coarse(3 * size_t(groups), 0.f);
+  for (int k = 0; k < groups * factor; ++k)
+    for (int ch = 0; ch < 3; ++ch) coarse[3 * (k / factor) + ch] += q[3 * k + ch];
+  std::vector<float> next_coarse = slab_second(coarse, groups, factor * d, a, nodes);
+  std::vector<float> next(q.size());
+  for (int k = 0; k < layers; ++k) {
+    double u = std::clamp((k + 0.5) / factor - 0.5, 0.0, double(groups - 1));
+    int c0 = std::min(static_cast<int>(u), groups - 1), c1 = std::min(c0 + 1, groups - 1);
+    double f = u - c0;
+    for (int ch = 0; ch < 3; ++ch)
+      next[3 * k + ch] = static_cast<float>(
+          ((1 - f) * next_coarse[3 * c0 + ch] + f * next_coarse[3 * c1 + ch]) / factor);
+  }
+  return next;
+}
+
 // HG(g |m|) about +z or -z (the sign of m), azimuth summed, on `n` nodes.
 PhaseNodes axis_phase(double g, double m, int n) {
   PhaseNodes ph = phase_nodes(1.0, g * std::min(1.0, std::abs(m)), n);
@@ -214,7 +239,11 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
         "must be at most 100 with orders (each order's quadrature grows with the layers squared)");
 
   LblSlabResult r;
+  check(o.gathers >= 1 && o.gathers <= kMaxGathers, "gathers",
+        "must be in [1, " + std::to_string(kMaxGathers) + "]");
   r.layers = std::clamp(static_cast<int>(std::ceil(p.tau / o.layer_tau)), 32, 20000);
+  const int factor = 1 << kOrderLevel;  // the coarse gathers' layers (second.hpp)
+  r.layers = (r.layers + factor - 1) / factor * factor;
   const double dtau = p.tau / r.layers;  // sigma_t dx of a layer (lattice units: dx = 1)
   // The lattice: one node per layer, the same coefficients for all channels.
   Volume v;
@@ -291,8 +320,14 @@ LblSlabResult run_lbl_slab(gpu::ClContext& cl, const SlabParams& p, const LblSla
       for (int c = 0; c < 3; ++c) source[3 * k + c] = static_cast<float>(emitted[k] * keep);
     }
   } else if (o.second) {
+    // `second` holds what the view sees (orders 2 to gathers + 1), the lattice starts from the
+    // last of them.
     second = slab_second(source, r.layers, dtau_r, albedo_r, esc_nodes);
     source = second;
+    for (int k = 2; k <= o.gathers; ++k) {
+      source = slab_next_coarse(source, r.layers, factor, dtau_r, albedo_r, esc_nodes);
+      for (size_t i = 0; i < source.size(); ++i) second[i] += source[i];
+    }
   }
   for (size_t i = 0; i < source.size(); ++i) source[i] *= escape[i];
   lattice.set_source(source);

@@ -3,11 +3,12 @@
 // lattice nodes across the slab, periodic sideways, open at both faces. The collimated beam's
 // scattered power per layer (Beer-Lambert along mu0, as the light march computes it) is the
 // lattice's source, or with `second` (the default) the second scattering that power gives,
-// computed exactly per layer. R and T are read as the pipeline's view pass reads the medium with
-// tms 0 (its default TMS reading is a radiance correction away from the forward peak, which a
-// flux integrates): the single scattering exactly (quadrature over directions, HG phase), the
-// second scattering and the lattice's scattered power per layer (the third and later events;
-// without `second`, the second and later) emitted isotropically with the transport's escape
+// computed exactly per layer, and with `gathers` (default 3, the pipeline's) the next orders
+// from it on coarser layers, the lattice from the last. R and T are read as the pipeline's view
+// pass reads the medium with tms 0 (its default TMS reading is a radiance correction away from the
+// forward peak, which a flux integrates): the single scattering exactly (quadrature over
+// directions, HG phase), the gathered orders and the lattice's scattered power per layer (the later
+// events; without `second`, the second and later) emitted isotropically with the transport's escape
 // probability through each face, and with g != 0 the forward-scattered light's scattering by the HG
 // phase. `scaled_view`: the whole slab as the delta-Eddington scaled problem instead. `orders`: the
 // real medium's low orders exactly, the lattice only for the rest (a diagnostic of the lattice's
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "gpu/cl_context.hpp"
+#include "pipelines/lbl/lbl_limits.hpp"
 #include "pipelines/reference/slab.hpp"
 
 namespace scatter::lbl {
@@ -30,6 +32,10 @@ struct LblSlabOptions {
   bool escape = true;        // scale each layer's emission by the escape correction (escape.hpp)
   bool scaled_view = false;  // 1: read the whole slab as the delta-Eddington scaled problem
   bool second = true;        // as the pipeline's setting: the second scattering exactly
+  // With `second`, as the pipeline's setting (and its default): the orders 2 to gathers + 1
+  // gathered exactly (the third and later on layers as coarse as the pipeline's grid, second.hpp),
+  // the lattice from the last of them.
+  int gathers = 3;
   // N in [2, 32]: the real medium's orders 2 to N exactly, the lattice from order N's light (a
   // diagnostic: what the lattice's tail costs; not a pipeline setting; `second` and
   // `scaled_view` do not apply; tau at most 100). 0: off.
