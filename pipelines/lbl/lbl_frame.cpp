@@ -189,15 +189,15 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
                                     : std::string())
           : "";
   // Where the multiple term is least accurate, and why (docs/BENCHMARKS.md, lbl: with the TMS
-  // reading, spheres at g 0.7 4-14 % on all terms, the thick ones the most, at g 0.9 9 %; at
-  // g -0.3 8 %, at g -0.7 35 %).
+  // reading, spheres at g 0.7 4-14 % on all terms, the thick ones the most, at g 0.9 8 %, a
+  // slab-like box under a grazing sun at g 0.75 12-15 %; at g -0.3 8 %, at g -0.7 35 %).
   const std::string caveat =
       !d.multiple ? ""
       : scene.medium.g >= 0.6
           ? "; at g " + short_number(scene.medium.g) +
                 " the multiple term is lbl's least accurate (a delta-Eddington lattice behind "
-                "one exact scattering: all terms measured 4-14 % off at g 0.7-0.9, the most "
-                "in optically thick media)"
+                "the scaled problem's exact orders: all terms measured 4-14 % off at g 0.7-0.9, "
+                "the most in optically thick media and under grazing light)"
       : scene.medium.g < kMultipleMeasuredMinG
           ? "; at g " + short_number(scene.medium.g) +
                 " the multiple term is lbl's least accurate (back-scattering, no forward peak "
