@@ -8,10 +8,14 @@
 // m = flow / (deposit summed over channels), |m| <= 1 (1 for one straight light); its
 // distribution taken as HG(|m|) about m, and HG(g) * HG(|m|) = HG(g |m|) (their Legendre
 // coefficients multiply), so the deposit is weighted by 4 pi HG(g |m|, m . w_out) with w_out the
-// way to the eye. The multiple term's emission: the lattice's light isotropic (or g_flux, below);
-// with second the second scattering's light, which the gather found travelling about its mean
-// direction m (|m| <= 1, kernels/lbl/second.cl), by the same model: 4 pi HG(g |m|, m . w_out)
-// (g_second = g; 0: isotropic). Next to a surface m points out of the medium, so the eye sees
+// way to the eye. With lobes > 1 (several lights, pipelines/lbl/lbl_frame.hpp light_lobes) the
+// deposit and flow hold each light's, one after the other (3 and 6 floats a voxel each), and each
+// light's deposit takes its own lobe: one mean direction for lights from different sides would
+// point between them and weight both lights by a lobe neither has. The multiple term's
+// emission: the lattice's light isotropic (or g_flux, below); with second the second
+// scattering's light, which the gather found travelling about its mean direction m (|m| <= 1,
+// kernels/lbl/second.cl), by the same model: 4 pi HG(g |m|, m . w_out) (g_second = g; 0:
+// isotropic). Next to a surface m points out of the medium, so the eye sees
 // more of that light face on and less at grazing angles than an isotropic emission gives.
 // scaled_view (g_scale = g): the multiple term, the lattice's delta-Eddington scaled light, is
 // gathered as that scaled medium emits and attenuates it: (1 - g) x the irradiance (sigma_s'
@@ -94,7 +98,7 @@ typedef struct {
   __global const float* sigma_t;
   __global const float* sigma_s;
   float w_single, w_multiple, g, g_flux, second_scale, g_second, g_scale;
-  int with_flow, tms, voxels;
+  int with_flow, lobes, tms, voxels;
 } ViewInputs;
 
 // One piece of the eye ray (length ds in voxel v, travelling to_eye towards the eye). The
@@ -103,12 +107,16 @@ typedef struct {
 // direction; with tms as the header says.
 void view_piece(const ViewInputs* in, int v, float3 to_eye, float ds, float inv_4pi_v,
                 float3* tr, float3* trm, float3* radiance) {
-  float phase = in->with_flow ? single_phase(in->deposit, in->flow, in->g, v, to_eye) : 1.0f;
-  float3 single = phase * (float3)(in->deposit[v], in->deposit[v + 1], in->deposit[v + 2]);
-  float3 beam = (float3)(0.0f);
-  if (in->with_flow) {
-    __global const float* extra = in->flow + 3 * in->voxels;
-    beam = phase * (float3)(extra[v], extra[v + 1], extra[v + 2]);
+  float3 single = (float3)(0.0f), beam = (float3)(0.0f);
+  for (int l = 0; l < in->lobes; ++l) {
+    __global const float* dep = in->deposit + 3 * l * in->voxels;
+    __global const float* fl = in->flow + 6 * l * in->voxels;
+    float phase = in->with_flow ? single_phase(dep, fl, in->g, v, to_eye) : 1.0f;
+    single += phase * (float3)(dep[v], dep[v + 1], dep[v + 2]);
+    if (in->with_flow) {
+      __global const float* extra = fl + 3 * in->voxels;
+      beam += phase * (float3)(extra[v], extra[v + 1], extra[v + 2]);
+    }
   }
   float3 diffuse = (float3)(0.0f);
   if (in->w_multiple != 0.0f)
@@ -129,7 +137,7 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
                         __global const float* sigma_t, __global const float* n_field,
                         __global const float* grad_field, __global const float* deposit,
                         __global const float* irr, float w_single, float w_multiple,
-                        __global const float* flow, float g_phase, int with_flow,
+                        __global const float* flow, float g_phase, int with_flow, int lobes,
                         __global const float* sigma_s, float g_scale, __global const float* lflux,
                         float g_flux, __global const float* second,
                         __global const float* second_dir, float second_scale, float g_second,
@@ -145,7 +153,7 @@ __kernel void view_pass(float3 origin, float voxel, int nx, int ny, int nz,
   ViewInputs in = {deposit,  flow,       irr,        lflux,        second,
                    second_dir, sigma_t,  sigma_s,    w_single,     w_multiple,
                    g_phase,  g_flux,     second_scale, g_second,   g_scale,
-                   with_flow, tms,       nx * ny * nz};
+                   with_flow, lobes, tms, nx * ny * nz};
   float t0, t1;
   if (grid_interval(&g, cam.position, d, &t0, &t1)) {
     if (!bend) {

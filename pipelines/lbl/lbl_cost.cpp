@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "pipelines/cost_support.hpp"
+#include "pipelines/lbl/lbl_frame.hpp"
 #include "pipelines/lbl/lbl_pipeline.hpp"
 #include "pipelines/lbl/light_rays.hpp"
 
@@ -57,6 +58,11 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
   l.device("scene.lights", rays * lbl::kRayFloats * 4, ray_text + " x 48 B (buffer)");
   l.device("scene.image.width", px * 12, "the image's buffer");
   l.host("scene.image.width", px * 12, "the image");
+  // lobes (light_lobes > 1): each light's deposit 12 B and flow 24 B a node.
+  const int lobes = lbl::light_lobes(scene, s);
+  if (lobes > 1)
+    l.device("scene.lights", n * 36.0 * lobes,
+             std::to_string(lobes) + " lights x " + grid + " x 36 B (each light's deposit)");
 
   // Volume: measured 72^3 0.37-0.55 s, 104^3 1.75 s (~1.5 us a node with the voxelizer).
   // What a kept state skips (Pipeline::keeps): everything but the view.

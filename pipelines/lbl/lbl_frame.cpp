@@ -3,6 +3,7 @@
 #include "bake/cache.hpp"
 #include "core/errors.hpp"
 #include "pipelines/asset_key.hpp"
+#include "pipelines/cost_support.hpp"
 #include "pipelines/lbl/lbl_limits.hpp"
 
 namespace scatter::lbl {
@@ -70,6 +71,14 @@ bool uses_tms(const Scene& scene, const LblSettings& s) {
 
 bool uses_second(const LblSettings& s) {
   return s.second && s.directions == 6 && s.interleave == 0;
+}
+
+int light_lobes(const Scene& scene, const LblSettings& s) {
+  const int lights = static_cast<int>(scene.lights.size());
+  if (scene.medium.g == 0 || lights < 2 || lights > s.lobes || s.interleave > 0) return 1;
+  const int margin = 1 + static_cast<int>(std::ceil(3 * s.smooth));
+  const double nodes = cost::grid_shape(scene, margin, s.blocked ? s.block : 1).count();
+  return lights * 36.0 * nodes <= kMaxLobeBytes ? lights : 1;
 }
 
 Decision decide(const State* state, const Scene& scene, const RenderRequest& request,
@@ -156,10 +165,26 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
            : "material unchanged: volume kept"});
   std::string path = d.bend ? "bent by the ray equation, step " + short_number(s.step) + " voxels"
                             : "constant n: straight rays, exact voxel crossings (no gradient)";
+  const int lobes = light_lobes(scene, s);
+  const size_t lights = scene.lights.size();
+  std::string lobe_text;
+  if (lobes > 1)
+    lobe_text =
+        "; each light's deposit and direction kept apart (the single term by each "
+        "light's phase lobe)";
+  else if (scene.medium.g != 0 && lights > 1)
+    lobe_text =
+        "; the lights' deposits summed, the single term by one phase lobe about their "
+        "mean direction (" +
+        std::string(s.interleave > 0           ? "interleaved march"
+                    : lights > size_t(s.lobes) ? "more lights than lobes " + std::to_string(s.lobes)
+                                               : "the lights' deposits would "
+                                                 "take over 512 MiB") +
+        ")";
   p.stages.push_back({"march", d.march,
-                      d.march ? std::to_string(scene.lights.size()) + " lights, " +
-                                    short_number(s.rays) + " rays per voxel width, " + path +
-                                    "; deposits added by CAS atomics"
+                      d.march ? std::to_string(lights) + " lights, " + short_number(s.rays) +
+                                    " rays per voxel width, " + path +
+                                    "; deposits added by CAS atomics" + lobe_text
                               : "lights and material unchanged: deposit kept"});
   p.stages.push_back(diffuse_stage(d, s));
   if (s.measure)

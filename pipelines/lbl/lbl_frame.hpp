@@ -34,6 +34,8 @@ struct State {
   cl::Buffer source;   // the lattice's source: the deposit, or with g != 0 the scaled beam's
   cl::Buffer flow;     // with g != 0: the deposit's direction summed over channels (3 per voxel,
                        // the view's phase), then the forward-scattered light's scattering (3)
+  int lobes = 1;       // light_lobes(): with more than 1, each light's deposit and flow, one
+  cl::Buffer lobe_deposit, lobe_flow;  // after the other (what the view reads, not deposit, flow)
   cl::Buffer lattice_flux;    // flux_phase: the lattice's light direction m (3 per voxel), made
                               // when first used
   bool flux_current = false;  // lattice_flux is the last diffusion's
@@ -60,6 +62,11 @@ bool uses_tms(const Scene& scene, const LblSettings& s);
 // The lattice starts from the light's exactly computed second scattering (setting second; the
 // 6-direction lattice, not interleaved with the march).
 bool uses_second(const LblSettings& s);
+// How many deposits the march keeps apart, one per light (setting lobes): the scene's lights
+// when g != 0, there are 2 to `lobes` of them, the march is not interleaved and their deposits
+// (36 B a node each, on the grid the cost estimate takes) fit kMaxLobeBytes; otherwise 1 (one
+// deposit, its phase lobe about the lights' mean direction).
+int light_lobes(const Scene& scene, const LblSettings& s);
 
 // Which stages a frame runs, from the scene, the request and what the last frame left.
 struct Decision {

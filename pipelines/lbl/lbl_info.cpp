@@ -16,6 +16,11 @@ const SettingsTable<LblSettings>& lbl_settings() {
                "Gaussian on the refractive index, in voxels"),
        setting("cutoff", &S::cutoff, 0, 0.5, kept("lights"),
                "a light ray stops under this fraction of its power"),
+       setting("lobes", &S::lobes, 1, lbl::kMaxLobes, kept("lights"),
+               "with g != 0 and several lights, up to this many lights each keep their own "
+               "deposit and direction, so that the single term (and the forward-scattered light) "
+               "takes each light's phase lobe (36 B a node a light); more lights than that, or 1, "
+               "share one lobe about their mean direction"),
        flag("blocked", &S::blocked, kept("material"),
             "1: the paper's blocks with interface buffers; 0: the global lattice (faster on a CPU "
             "device)"),

@@ -13,4 +13,9 @@ constexpr double kMultipleMeasuredMinG = -0.3;
 // slab's too (pipelines/lbl/slab.hpp).
 constexpr int kMaxGathers = 8;
 
+// The setting `lobes` at most, and what the lights' own deposits may take on the device
+// (pipelines/lbl/lbl_frame.cpp, light_lobes).
+constexpr int kMaxLobes = 64;
+constexpr double kMaxLobeBytes = 512.0 * 1024 * 1024;
+
 }  // namespace scatter::lbl

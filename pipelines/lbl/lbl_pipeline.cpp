@@ -101,18 +101,45 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   last_steps_ = 0;
   int interleaved_steps = 0;  // lattice steps run between march rounds
   if (d.march) {
-    lbl::RaySet rays = lbl::light_rays(scene.lights, st.volume, s.rays, 4096);
-    cl::Buffer ray_buf = upload(cl, rays.rays);
     const bool with_flow = scene.medium.g != 0;
+    const int lobes = lbl::light_lobes(scene, s);
+    lbl::RaySet rays;  // all the lights' (with lobes, each light's in turn below)
+    cl::Buffer ray_buf;
+    if (lobes == 1) {
+      rays = lbl::light_rays(scene.lights, st.volume, s.rays, 4096);
+      ray_buf = upload(cl, rays.rays);
+    }
     cl::Buffer* flow = with_flow ? &st.flow : nullptr;
     // Until the march finishes the deposit is not the lights': a march that throws (an OpenCL
     // error) leaves a later frame marching again rather than reading a half-written deposit.
     st.lights.clear();
     st.diffused = st.second_current = false;
+    st.lobes = 1;
     for (cl::Buffer* b : {&st.deposit, &st.source})
       queue.enqueueFillBuffer(*b, 0.f, 0, 3 * st.volume.count() * sizeof(float));
     if (with_flow) queue.enqueueFillBuffer(st.flow, 0.f, 0, 6 * st.volume.count() * sizeof(float));
-    if (s.interleave > 0 && d.diffuse) {
+    if (lobes > 1) {
+      // Each light marched alone, its deposit and flow copied out (the lattice's source, which
+      // only the diffusion reads, summed over them as before).
+      const size_t bytes = 3 * st.volume.count() * sizeof(float);
+      if (!st.lobe_deposit() || st.lobe_deposit.getInfo<CL_MEM_SIZE>() != lobes * bytes) {
+        st.lobe_deposit = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, lobes * bytes);
+        st.lobe_flow = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 2 * lobes * bytes);
+      }
+      for (int i = 0; i < lobes; ++i) {
+        rays = lbl::light_rays({scene.lights[i]}, st.volume, s.rays, 4096);
+        ray_buf = upload(cl, rays.rays);
+        if (i > 0) {
+          queue.enqueueFillBuffer(st.deposit, 0.f, 0, bytes);
+          queue.enqueueFillBuffer(st.flow, 0.f, 0, 2 * bytes);
+        }
+        lbl::march(cl, st.device, ray_buf, rays.count(), d.bend, s.step * st.volume.voxel, s.cutoff,
+                   scene.medium.g, st.deposit, st.source, flow);
+        queue.enqueueCopyBuffer(st.deposit, st.lobe_deposit, 0, i * bytes, bytes);
+        queue.enqueueCopyBuffer(st.flow, st.lobe_flow, 0, 2 * i * bytes, 2 * bytes);
+        queue.finish();  // before ray_buf is replaced
+      }
+    } else if (s.interleave > 0 && d.diffuse) {
       if (!s.warm) st.lattice->clear();
       int per_round = std::max(1, static_cast<int>(std::lround(s.interleave * s.step)));
       lbl::InterleaveResult ir = lbl::march_interleaved(
@@ -128,6 +155,7 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
                  scene.medium.g, st.deposit, st.source, flow);
     }
     queue.finish();
+    st.lobes = lobes;
     st.lights = lbl::light_key(scene, s);
     st.diffused = st.second_current = false;
     clock.stop("march");
@@ -203,9 +231,10 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
   }
   const lbl::ClVolume& v = st.device;
   gpu::set_args(
-      k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_t, v.n, v.grad, st.deposit,
-      st.lattice->irradiance_buffer(), w_single, w_multiple, st.flow, float(scene.medium.g),
-      scene.medium.g != 0 ? 1 : 0, v.sigma_s, float(s.scaled_view ? scene.medium.g : 0.0),
+      k, v.origin, v.voxel, v.nx, v.ny, v.nz, v.sigma_t, v.n, v.grad,
+      st.lobes > 1 ? st.lobe_deposit : st.deposit, st.lattice->irradiance_buffer(), w_single,
+      w_multiple, st.lobes > 1 ? st.lobe_flow : st.flow, float(scene.medium.g),
+      scene.medium.g != 0 ? 1 : 0, st.lobes, v.sigma_s, float(s.scaled_view ? scene.medium.g : 0.0),
       flux_phase ? st.lattice_flux : st.deposit, float(flux_phase ? scene.medium.g : 0.0),
       st.with_second ? st.second : st.deposit, st.with_second ? st.second_dir : st.deposit,
       float(st.with_second ? 1 / (1 - scene.medium.g) : 0.0),

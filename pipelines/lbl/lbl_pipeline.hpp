@@ -41,6 +41,7 @@ struct LblSettings {
   double step = 0.5;
   double smooth = 1;
   double cutoff = 1e-4;
+  int lobes = 16;
   bool blocked = false;
   int block = 4;
   int inner = 1;

@@ -89,13 +89,6 @@ struct Tally {
 std::string known_failure(const std::string& pipeline, const StressCase& c,
                           const std::string& failure) {
   if (failure.rfind("energy above", 0) != 0) return "";
-  // lbl takes the single term's phase about its light's mean direction m, as HG(g |m|): exact
-  // for one light, but several lights from spread directions with |g| near 1 put a lobe where
-  // none of them has one (mixed/265: 16 suns, g -0.99, x5.4). A limit of the one-lobe model.
-  if (pipeline == "lbl")
-    return std::abs(c.params.g) >= 0.9 && c.scene.at("lights").size() > 1
-               ? "lbl single term above the bound: several lights, |g| near 1, one phase lobe"
-               : "";
   if (pipeline != "single") return "";
   // Density detail of one voxel (layers, a shell, noise) several mean free paths deep, under the
   // suite's 200 samples for 8^3 or 16^3 voxels: a sample carries its centre's sigma_s over a cell
