@@ -1,5 +1,6 @@
 #include "gpu/gl_objects.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <vector>
 
@@ -70,12 +71,17 @@ void check_gl(const char* what) {
 
 namespace {
 
-GlObject compile(GLenum type, const std::string& path) {
+// `defines` after the source's first line (its #version).
+GlObject compile(GLenum type, const std::string& path, const std::string& defines = "") {
   GlObject shader = GlObject::create(GlKind::Shader, type);
   std::string_view src = embedded_source(path);
-  const char* text = src.data();
-  auto len = static_cast<GLint>(src.size());
-  glShaderSource(shader.get(), 1, &text, &len);
+  const size_t eol = std::min(src.find('\n'), src.size());
+  const std::string_view head = src.substr(0, eol), tail = src.substr(eol);
+  const std::string middle = "\n" + defines;
+  const char* text[] = {head.data(), middle.data(), tail.data()};
+  const GLint len[] = {static_cast<GLint>(head.size()), static_cast<GLint>(middle.size()),
+                       static_cast<GLint>(tail.size())};
+  glShaderSource(shader.get(), 3, text, len);
   glCompileShader(shader.get());
   GLint ok = 0;
   glGetShaderiv(shader.get(), GL_COMPILE_STATUS, &ok);
@@ -111,9 +117,10 @@ GlObject link(const std::vector<const GlObject*>& stages, const std::string& wha
 
 }  // namespace
 
-GlObject build_program(const std::string& vertex_path, const std::string& fragment_path) {
-  GlObject vs = compile(GL_VERTEX_SHADER, vertex_path);
-  GlObject fs = compile(GL_FRAGMENT_SHADER, fragment_path);
+GlObject build_program(const std::string& vertex_path, const std::string& fragment_path,
+                       const std::string& defines) {
+  GlObject vs = compile(GL_VERTEX_SHADER, vertex_path, defines);
+  GlObject fs = compile(GL_FRAGMENT_SHADER, fragment_path, defines);
   return link({&vs, &fs}, vertex_path + " + " + fragment_path);
 }
 

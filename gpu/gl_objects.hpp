@@ -39,8 +39,10 @@ class GlObject {
 };
 
 // Compiles and links a vertex + fragment shader pair from shaders/; throws GpuError with the info
-// log of the stage that failed.
-GlObject build_program(const std::string& vertex_path, const std::string& fragment_path);
+// log of the stage that failed. `defines` ("#define NAME 1\n" lines) go after each stage's
+// #version line: a variant of the same sources.
+GlObject build_program(const std::string& vertex_path, const std::string& fragment_path,
+                       const std::string& defines = "");
 // Compiles and links a compute shader from shaders/.
 GlObject build_compute_program(const std::string& path);
 

@@ -104,7 +104,8 @@ __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, in
 // light_tr: light_count blocks of 3 * count floats from light_transmittance (light_grad alike,
 // read with `gradient`). out[i]: the factor, w the log of its scale (tr_gradient); shift[i]: the
 // offset of the Gaussian's centre; per_light[4 (i light_count + l) + c]: light l's share of the
-// factor without its phase (the splat evaluates that per view ray); cut[i]: see below.
+// factor without its phase (the splat evaluates that per view ray); cut[3 i .. 3 i + 2]: the
+// depth cuts, see below.
 __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __global const float* sigma_t,
                           __global const float* at, __global const float* position, __global const float* sigma,
                           __global const float* weight, __global const float* sigma_s, __global const float* planes,
@@ -162,6 +163,7 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   float3 offset = (float3)(0.0f);
   float log_scale = 0.0f;
   float4 depth_cut = (float4)(0.0f);  // zeros: no cut
+  float4 quad_slope = (float4)(0.0f), quad_curv = (float4)(0.0f);  // zeros: no cut
   float s = sigma[i] * sigma_scale;  // sample_fraction widens the Gaussians of the prefix drawn
   float3 axis = (float3)(s);
   if (gradient && visible) {
@@ -194,8 +196,29 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
     // integrates only on the plane's near side (n . x <= w, as a split piece's plane).
     if (isfinite(tau_min) && (g.x != 0.0f || g.y != 0.0f || g.z != 0.0f))
       depth_cut = (float4)(-g, tau_min - dot(g, b));
+    // The model with its curvature, tau_min + g . (x - a) + 1/2 sum_k curv_k (x_k - a_k)^2, goes
+    // negative on the near side of that plane too where the curvature is concave (it widens the
+    // Gaussian, and its depth falls away from the centre): the splat integrates only where this
+    // quadratic is >= 0, its zero set along each view ray. Kept about the moved centre c (the
+    // splat measures from it): depth tau_c, slope g_c there. Where no axis is concave the
+    // quadratic lies above the linear model, and the linear cut alone is the same; where it stays
+    // >= 0 over the ball the splat covers (radius r about c, as shift's w below: tau_c - |g_c| r
+    // + 1/2 sum_k min(curv_k, 0) r^2 >= 0), it cuts nothing. Neither writes a second cut.
+    float3 concave = fmin(curv, 0.0f);
+    if (isfinite(tau_min) && (concave.x < 0.0f || concave.y < 0.0f || concave.z < 0.0f)) {
+      float3 u = d + offset;
+      float3 gc = g + curv * u;
+      float tau_c = tau_min + dot(g, u) + 0.5f * dot(curv * u, u);
+      float r = 3.0f * fmax(fmax(axis.x, fmax(axis.y, axis.z)), s) + length(offset);
+      if (tau_c - length(gc) * r + 0.5f * (concave.x + concave.y + concave.z) * r * r < 0.0f) {
+        quad_slope = (float4)(gc, tau_c);
+        quad_curv = (float4)(curv, 0.0f);
+      }
+    }
   }
-  cut[i] = depth_cut;
+  cut[3 * i] = depth_cut;
+  cut[3 * i + 1] = quad_slope;
+  cut[3 * i + 2] = quad_curv;
   out[i] = (float4)(res[0], res[1], res[2], log_scale);
   // w: the cut-off radius around the moved centre (3 sigma, widened by the move so that the ball
   // around the sample's own centre, where the product is evaluated, stays covered).

@@ -197,11 +197,13 @@ void SinglePipeline::upload() {
   glNamedBufferStorage(colors_.get(),
                        static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
                        GL_MAP_READ_BIT | GL_DYNAMIC_STORAGE_BIT);
-  for (gpu::GlObject* buffer : {&shifts_, &axes_, &cuts_}) {
+  // cuts_: three float4 a sample (the linear cut, the quadratic model's slope and curvature).
+  for (auto [buffer, floats] :
+       {std::pair{&shifts_, 4}, std::pair{&axes_, 4}, std::pair{&cuts_, 12}}) {
     *buffer = gpu::GlObject::create(gpu::GlKind::Buffer);
     glNamedBufferStorage(buffer->get(),
-                         static_cast<GLsizeiptr>(std::max(b.count, 1) * 4 * sizeof(float)), nullptr,
-                         GL_DYNAMIC_STORAGE_BIT);
+                         static_cast<GLsizeiptr>(std::max(b.count, 1) * floats * sizeof(float)),
+                         nullptr, GL_DYNAMIC_STORAGE_BIT);
   }
   reset_moves();
   current_.uploaded = true;
@@ -255,6 +257,8 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
     distance_program_ = build_distance_program();
     shade_program_ = gpu::build_compute_program("shaders/single/shade.comp");
     splat_program_ = gpu::build_program("shaders/single/splat.vert", "shaders/single/splat.frag");
+    splat_quad_program_ = gpu::build_program("shaders/single/splat.vert",
+                                             "shaders/single/splat.frag", "#define QUAD_CUT 1\n");
     empty_vao_ = gpu::GlObject::create(gpu::GlKind::VertexArray);
   }
   if (!current_.uploaded) upload();
@@ -331,7 +335,8 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   glFinish();
   clock.stop("shade");
 
-  const GLuint splat = splat_program_.get();
+  const bool quad_cut = s.exact_tr && s.tr_gradient && s.tr_hessian;  // else no cut to apply
+  const GLuint splat = (quad_cut ? splat_quad_program_ : splat_program_).get();
   RenderTarget out(lw, lh);
   uniform_matrix(splat, "view_projection", cam.projection * cam.view);
   set_camera_uniforms(splat, scene);

@@ -143,7 +143,7 @@ class SinglePipeline : public Pipeline {
                   const BakeProgress& progress);
   void upload();
   // The samples' own Gaussians in shifts_ (no move) and axes_ (sigma on every axis), and no
-  // cut in cuts_.
+  // cuts (linear or quadratic) in cuts_.
   void reset_moves();
   // exact_tr: the per-sample factors by kernels/single/shade.cl, written into colors_.
   // With `gradient`, also each Gaussian's offset into shifts_ (kernels/single/shade.cl). Only the
@@ -161,6 +161,9 @@ class SinglePipeline : public Pipeline {
   std::unique_ptr<BakeCache> own_cache_;
   Current current_;
   gpu::GlObject distance_program_, shade_program_, splat_program_, upsample_program_, empty_vao_;
+  // The splat with the quadratic model's cut (QUAD_CUT, shaders/single/splat.frag): only frames
+  // with tr_gradient and tr_hessian have one to apply.
+  gpu::GlObject splat_quad_program_;
   gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_, planes_,
       cuts_, light_factors_;
   cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_coarse_weight_,

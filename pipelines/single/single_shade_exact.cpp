@@ -33,8 +33,10 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
                            size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     cl_axes_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY,
                           size_t(std::max(b.count, 1)) * 4 * sizeof(float));
+    // Three float4 a sample: the linear depth cut, the quadratic model's slope and depth, its
+    // curvature (kernels/single/shade.cl).
     cl_cut_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY,
-                         size_t(std::max(b.count, 1)) * 4 * sizeof(float));
+                         size_t(std::max(b.count, 1)) * 12 * sizeof(float));
     current_.cl_uploaded = true;
   }
   const std::vector<std::string> program = with_cl_library({"kernels/single/shade.cl"});
@@ -103,7 +105,7 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
     if (count > 0)
       cl.queue().enqueueNDRangeKernel(k, cl::NDRange(size_t(first)), cl::NDRange(size_t(count)));
   std::vector<float> out(size_t(b.count) * 4), shift(size_t(b.count) * 4),
-      axes(size_t(b.count) * 4), cut(size_t(b.count) * 4);
+      axes(size_t(b.count) * 4), cut(size_t(b.count) * 12);
   cl.queue().enqueueReadBuffer(cl_out_, CL_TRUE, 0, out.size() * sizeof(float), out.data());
   cl.queue().enqueueReadBuffer(cl_shift_, CL_TRUE, 0, shift.size() * sizeof(float), shift.data());
   cl.queue().enqueueReadBuffer(cl_axes_, CL_TRUE, 0, axes.size() * sizeof(float), axes.data());

@@ -11,7 +11,10 @@ flat in float cutoff;
 flat in vec3 factor;
 flat in float log_scale;  // the factor's scale is exp(log_scale)
 flat in vec4 clip_plane;  // the piece's side: n . x <= d (zeros: everywhere)
-flat in vec4 depth_cut;   // where the transmittance model's optical depth is >= 0: likewise
+flat in vec4 depth_cut;   // where the linear transmittance model's optical depth is >= 0: likewise
+flat in vec4 quad_slope;  // the quadratic model's about the centre, (g, tau_c) ...
+flat in vec4 quad_curv;   // ... and (curv, 0): integrated only where it is >= 0 (zeros: no cut,
+                          // written only where an axis is concave)
 flat in int sample_index;
 
 // per_ray_phase (exact_tr): factor holds the phase at the sample's centre; the fragment takes
@@ -97,6 +100,54 @@ void clip_chord(vec4 plane, vec3 d, inout float x, inout float y) {
   else if (ne < 0.0) y = x;
 }
 
+// Where along the ray the quadratic model's optical depth, tau_c + g . e + 1/2 sum_k curv_k e_k^2
+// with e = o + s d the offset from the centre (s = t - tm), is >= 0: up to two intervals of s,
+// keep0 and keep1 (empty: y <= x; 1e30 for an open end). In s it is a s^2 + b s + c; over a chord
+// of half length hc where the s^2 term is negligible, a half-line.
+void quad_keep(vec3 d, vec3 o, float hc, out vec2 keep0, out vec2 keep1) {
+  const float OPEN = 1e30;
+  vec3 cv = quad_curv.xyz;
+  float a = 0.5 * dot(cv, d * d);
+  float b = dot(quad_slope.xyz, d) + dot(cv, o * d);
+  float c = quad_slope.w + dot(quad_slope.xyz, o) + 0.5 * dot(cv, o * o);
+  keep0 = vec2(-OPEN, OPEN);
+  keep1 = vec2(OPEN, -OPEN);
+  if (abs(a) * hc * hc <= 1e-6 * (abs(b) * hc + abs(c))) {
+    if (b > 0.0) keep0.x = -c / b;
+    else if (b < 0.0) keep0.y = -c / b;
+    else if (c < 0.0) keep0 = vec2(OPEN, -OPEN);
+    return;
+  }
+  float disc = b * b - 4.0 * a * c;
+  if (disc <= 0.0) {
+    // No real zero: negative everywhere (a < 0) or nowhere.
+    if (a < 0.0) keep0 = vec2(OPEN, -OPEN);
+    return;
+  }
+  // The stable pair of roots (no cancellation between b and the square root).
+  float q = -0.5 * (b + (b >= 0.0 ? sqrt(disc) : -sqrt(disc)));
+  float r1 = q / a, r2 = c / q;
+  vec2 r = vec2(min(r1, r2), max(r1, r2));
+  if (a < 0.0) {
+    keep0 = r;  // >= 0 between the zeros
+  } else {
+    keep0.y = r.x;  // and outside them
+    keep1 = vec2(r.y, OPEN);
+  }
+}
+
+// The span of [u, w] inside the quadratic model's keep intervals (in t: s + tm).
+float kept_span(float u, float w, vec2 keep0, vec2 keep1, float tc, float k, float log_amp) {
+  float sum = 0.0;
+  float x0 = max(u, keep0.x), y0 = min(w, keep0.y);
+  if (y0 > x0) sum += erf_span((x0 - tc) * k, (y0 - tc) * k, log_amp);
+#ifdef QUAD_CUT
+  float x1 = max(u, keep1.x), y1 = min(w, keep1.y);
+  if (y1 > x1) sum += erf_span((x1 - tc) * k, (y1 - tc) * k, log_amp);
+#endif
+  return sum;
+}
+
 void main() {
   ivec2 px = ivec2(gl_FragCoord.xy) * stride;
   if (px.x >= int(size.x) || px.y >= int(size.y)) discard;
@@ -125,6 +176,18 @@ void main() {
   clip_chord(clip_plane, d, x, y);
   clip_chord(depth_cut, d, x, y);
   if (y <= x) discard;
+  // The quadratic model (tr_hessian) clips further where its curvature is concave: its depth
+  // falls away from the centre, negative on the near side of the linear cut too.
+  // Only in the variant built with QUAD_CUT (tr_gradient and tr_hessian: SinglePipeline::render);
+  // without it the work is not there at all (a CPU rasteriser runs both sides of a branch).
+  vec2 keep0 = vec2(-1e30, 1e30), keep1 = vec2(1e30, -1e30);
+#ifdef QUAD_CUT
+  if (any(lessThan(quad_curv.xyz, vec3(0.0)))) {
+    quad_keep(d, o, half_chord, keep0, keep1);
+    keep0 += tm;
+    keep1 += tm;
+  }
+#endif
   float lo = max(x, ta), hi = y, span = 0.0;
   float log_amp = log_scale - 0.5 * q;
   if (clip_back != 0) {
@@ -135,10 +198,10 @@ void main() {
       float t4 = texelFetch(fourth, px, 0).r;
       float hi2 = t4 > t3 ? min(y, t4) : y;
       float lo2 = max(x, t3);
-      if (hi2 > lo2) span += erf_span((lo2 - tc) * k, (hi2 - tc) * k, log_amp);
+      if (hi2 > lo2) span += kept_span(lo2, hi2, keep0, keep1, tc, k, log_amp);
     }
   }
-  if (hi > lo) span += erf_span((lo - tc) * k, (hi - tc) * k, log_amp);
+  if (hi > lo) span += kept_span(lo, hi, keep0, keep1, tc, k, log_amp);
   if (span <= 0.0) discard;
   float integral = 0.88622693 / k * span;
   radiance = vec4(ray_factor(d) * integral, 0.0);

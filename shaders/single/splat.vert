@@ -12,8 +12,11 @@ layout(std430, binding = 7) readonly buffer Axes { vec4 axes[]; };
 
 // A piece split at an extinction jump counts only where n . x <= d (xyz n, w d; zeros: everywhere).
 layout(std430, binding = 8) readonly buffer Planes { vec4 plane[]; };
-// Where the transmittance model's optical depth is negative: integrate only where n . x <= d
-// (exact_tr with tr_gradient: kernels/single/shade.cl; zeros: everywhere).
+// Where the transmittance model's optical depth is negative (exact_tr with tr_gradient:
+// kernels/single/shade.cl), three a sample: cut[3 i], the linear model's, integrate only where
+// n . x <= d (zeros: everywhere); cut[3 i + 1] and cut[3 i + 2], the quadratic model's about the
+// moved centre c, tau_c + g . (x - c) + 1/2 sum_k curv_k (x_k - c_k)^2 as (g, tau_c) and
+// (curv, 0), integrate only where it is >= 0 (zeros: everywhere).
 layout(std430, binding = 9) readonly buffer Cuts { vec4 cut[]; };
 
 uniform mat4 view_projection;
@@ -31,6 +34,8 @@ flat out vec3 factor;
 flat out float log_scale;  // the factor's scale, as its logarithm (tr_gradient; else 0)
 flat out vec4 clip_plane;
 flat out vec4 depth_cut;
+flat out vec4 quad_slope;
+flat out vec4 quad_curv;
 flat out int sample_index;
 
 void main() {
@@ -40,7 +45,9 @@ void main() {
   factor = color[i].rgb;
   log_scale = color[i].w;
   clip_plane = plane[i];
-  depth_cut = cut[i];
+  depth_cut = cut[3u * i];
+  quad_slope = cut[3u * i + 1u];
+  quad_curv = cut[3u * i + 2u];
   sample_index = int(i);
   vec2 corner = vec2(gl_VertexID & 1, (gl_VertexID >> 1) & 1) * 2.0 - 1.0;
   float radius = max(3.0 * max(gauss_sigma.x, max(gauss_sigma.y, gauss_sigma.z)), shift[i].w);

@@ -198,6 +198,33 @@ TEST_P(Stress, ExtremeScenes) {
   }
 }
 
+// One-voxel shells seen from inside, several mean free paths a voxel (long mode), with samples
+// enough to resolve the shell: under `single` they stay under the bound since the splat clips to
+// the quadratic transmittance model's own zero set (before: 32x-21,000x; docs/STRESS.md).
+TEST(SingleShells, InsideUnderTheBoundWithEnoughSamples) {
+  const std::vector<StressCase> all = stress_cases(Mode::Long, data_dir());
+  const PipelineInfo& info = pipeline_info("single");
+  const std::vector<std::string> names = {"mixed/718", "mixed/914", "mixed/1096", "mixed/1278"};
+  int checked = 0;
+  for (size_t i = 0; i < all.size(); ++i) {
+    const StressCase& c = all[i];
+    if (std::find(names.begin(), names.end(), c.name) == names.end()) continue;
+    ASSERT_EQ(c.params.density, "shell") << c.name;
+    ASSERT_EQ(terms_for(info, i + 1), Terms::Single) << c.name;  // as ExtremeScenes numbers them
+    Scene scene = parse_scene(c.scene, data_dir());
+    auto pipeline = make_pipeline("single", test::shared_gpu());
+    const RenderRequest request{Terms::Single, {{"samples", 5000}, {"directions", 8}}, nullptr};
+    pipeline->bake(scene, request);
+    const RenderResult r = pipeline->render(scene, request);
+    EXPECT_EQ(bad_value(r.image), "") << c.name;
+    const std::optional<Image> bound = single_bound(scene, false);
+    ASSERT_TRUE(bound) << c.name;
+    EXPECT_EQ(above_bound(r.image, *bound), "") << c.name;
+    ++checked;
+  }
+  EXPECT_EQ(checked, int(names.size()));
+}
+
 // The suite is as large as docs/STRESS.md says, and every extreme the parser rejects is rejected
 // with a ValidationError that names the field.
 TEST(StressSuite, SizeAndRejections) {
