@@ -106,6 +106,13 @@ __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, in
 // offset of the Gaussian's centre; per_light[4 (i light_count + l) + c]: light l's share of the
 // factor without its phase (the splat evaluates that per view ray); cut[3 i .. 3 i + 2]: the
 // depth cuts, see below.
+// The cut-off radius around a Gaussian's moved centre: 3 sigma (its widest axis, at least the
+// sample's own s), widened by the move so that the ball around the sample's own centre, where the
+// product is evaluated, stays covered. The splat covers this ball (shift's w).
+float splat_reach(float3 axis, float s, float3 offset) {
+  return 3.0f * fmax(fmax(axis.x, fmax(axis.y, axis.z)), s) + length(offset);
+}
+
 __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __global const float* sigma_t,
                           __global const float* at, __global const float* position, __global const float* sigma,
                           __global const float* weight, __global const float* sigma_s, __global const float* planes,
@@ -202,14 +209,14 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
     // quadratic is >= 0, its zero set along each view ray. Kept about the moved centre c (the
     // splat measures from it): depth tau_c, slope g_c there. Where no axis is concave the
     // quadratic lies above the linear model, and the linear cut alone is the same; where it stays
-    // >= 0 over the ball the splat covers (radius r about c, as shift's w below: tau_c - |g_c| r
+    // >= 0 over the ball the splat covers (radius r about c, splat_reach: tau_c - |g_c| r
     // + 1/2 sum_k min(curv_k, 0) r^2 >= 0), it cuts nothing. Neither writes a second cut.
     float3 concave = fmin(curv, 0.0f);
     if (isfinite(tau_min) && (concave.x < 0.0f || concave.y < 0.0f || concave.z < 0.0f)) {
       float3 u = d + offset;
       float3 gc = g + curv * u;
       float tau_c = tau_min + dot(g, u) + 0.5f * dot(curv * u, u);
-      float r = 3.0f * fmax(fmax(axis.x, fmax(axis.y, axis.z)), s) + length(offset);
+      float r = splat_reach(axis, s, offset);
       if (tau_c - length(gc) * r + 0.5f * (concave.x + concave.y + concave.z) * r * r < 0.0f) {
         quad_slope = (float4)(gc, tau_c);
         quad_curv = (float4)(curv, 0.0f);
@@ -220,10 +227,7 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   cut[3 * i + 1] = quad_slope;
   cut[3 * i + 2] = quad_curv;
   out[i] = (float4)(res[0], res[1], res[2], log_scale);
-  // w: the cut-off radius around the moved centre (3 sigma, widened by the move so that the ball
-  // around the sample's own centre, where the product is evaluated, stays covered).
-  float smax = fmax(axis.x, fmax(axis.y, axis.z));
-  shift[i] = (float4)(offset, 3.0f * fmax(smax, s) + length(offset));
+  shift[i] = (float4)(offset, splat_reach(axis, s, offset));
   // The Gaussian's standard deviation per axis; w: its amplitude relative to the isotropic one's
   // (already in the factor: 1).
   axes[i] = (float4)(axis, 1.0f);

@@ -100,28 +100,30 @@ void clip_chord(vec4 plane, vec3 d, inout float x, inout float y) {
   else if (ne < 0.0) y = x;
 }
 
+const float OPEN = 1e30;  // an interval's open end
+const vec2 EVERYWHERE = vec2(-OPEN, OPEN), NOWHERE = vec2(OPEN, -OPEN);
+
 // Where along the ray the quadratic model's optical depth, tau_c + g . e + 1/2 sum_k curv_k e_k^2
 // with e = o + s d the offset from the centre (s = t - tm), is >= 0: up to two intervals of s,
-// keep0 and keep1 (empty: y <= x; 1e30 for an open end). In s it is a s^2 + b s + c; over a chord
+// keep0 and keep1 (empty: y <= x). In s it is a s^2 + b s + c; over a chord
 // of half length hc where the s^2 term is negligible, a half-line.
 void quad_keep(vec3 d, vec3 o, float hc, out vec2 keep0, out vec2 keep1) {
-  const float OPEN = 1e30;
   vec3 cv = quad_curv.xyz;
   float a = 0.5 * dot(cv, d * d);
   float b = dot(quad_slope.xyz, d) + dot(cv, o * d);
   float c = quad_slope.w + dot(quad_slope.xyz, o) + 0.5 * dot(cv, o * o);
-  keep0 = vec2(-OPEN, OPEN);
-  keep1 = vec2(OPEN, -OPEN);
+  keep0 = EVERYWHERE;
+  keep1 = NOWHERE;
   if (abs(a) * hc * hc <= 1e-6 * (abs(b) * hc + abs(c))) {
     if (b > 0.0) keep0.x = -c / b;
     else if (b < 0.0) keep0.y = -c / b;
-    else if (c < 0.0) keep0 = vec2(OPEN, -OPEN);
+    else if (c < 0.0) keep0 = NOWHERE;
     return;
   }
   float disc = b * b - 4.0 * a * c;
   if (disc <= 0.0) {
     // No real zero: negative everywhere (a < 0) or nowhere.
-    if (a < 0.0) keep0 = vec2(OPEN, -OPEN);
+    if (a < 0.0) keep0 = NOWHERE;
     return;
   }
   // The stable pair of roots (no cancellation between b and the square root).
@@ -180,7 +182,7 @@ void main() {
   // falls away from the centre, negative on the near side of the linear cut too.
   // Only in the variant built with QUAD_CUT (tr_gradient and tr_hessian: SinglePipeline::render);
   // without it the work is not there at all (a CPU rasteriser runs both sides of a branch).
-  vec2 keep0 = vec2(-1e30, 1e30), keep1 = vec2(1e30, -1e30);
+  vec2 keep0 = EVERYWHERE, keep1 = NOWHERE;
 #ifdef QUAD_CUT
   if (any(lessThan(quad_curv.xyz, vec3(0.0)))) {
     quad_keep(d, o, half_chord, keep0, keep1);
