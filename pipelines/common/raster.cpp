@@ -35,6 +35,26 @@ const MeshBuffers& KeptMesh::get(const Scene& scene) {
   return *mesh_;
 }
 
+bool KeptMesh::eye_inside(const Scene& scene) {
+  const Vec3& e = scene.camera.position;
+  const Aabb b = scene.shape ? scene.shape->bounds() : scene.mesh->bounds();
+  if (e.x < b.lo.x || e.y < b.lo.y || e.z < b.lo.z || e.x > b.hi.x || e.y > b.hi.y || e.z > b.hi.z)
+    return false;
+  std::vector<char> inside;
+  if (scene.shape) {
+    make_shape_solid(*scene.shape)->classify_column(e.x, e.y, {e.z}, inside);
+    return inside[0] != 0;
+  }
+  std::string key = mesh_key(scene);
+  if (!solid_ || key != solid_key_) {
+    solid_mesh_ = scene.mesh;
+    solid_ = make_mesh_solid(*solid_mesh_);
+    solid_key_ = std::move(key);
+  }
+  solid_->classify_column(e.x, e.y, {e.z}, inside);
+  return inside[0] != 0;
+}
+
 MeshBuffers::MeshBuffers(const Mesh& mesh) {
   std::vector<float> interleaved;
   interleaved.reserve(mesh.positions.size() * 6);

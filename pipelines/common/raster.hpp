@@ -9,6 +9,7 @@
 #include "gpu/gl_objects.hpp"
 #include "pipelines/image.hpp"
 #include "scene/scene.hpp"
+#include "scene/solid.hpp"
 
 namespace scatter {
 
@@ -40,10 +41,18 @@ std::string mesh_key(const Scene& scene);
 class KeptMesh {
  public:
   const MeshBuffers& get(const Scene& scene);
+  // Whether the camera is inside the object (the exact shape's test, else the mesh's parity, its
+  // solid kept while the mesh stays the same): then every view ray starts in the medium, and the
+  // first surface depth peeling finds is where it leaves, so the medium along the ray is [eye,
+  // 1st], [2nd, 3rd] rather than [1st, 2nd], [3rd, 4th]. A camera outside the mesh's box costs a
+  // box test.
+  bool eye_inside(const Scene& scene);
 
  private:
-  std::string key_;
+  std::string key_, solid_key_;
   std::unique_ptr<MeshBuffers> mesh_;
+  std::shared_ptr<const Mesh> solid_mesh_;  // what solid_ refers to
+  std::unique_ptr<Solid> solid_;
 };
 
 class RenderTarget {

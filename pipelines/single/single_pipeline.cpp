@@ -18,6 +18,15 @@
 
 namespace scatter {
 
+bool phase_per_ray(const Scene& scene, double sigma_median) {
+  if (scene.lights.empty() || scene.medium.g == 0) return false;
+  if (std::abs(scene.medium.g) >= kPerRayPhaseG) return true;
+  const Aabb b = scene.mesh->bounds();
+  const Vec3& e = scene.camera.position;
+  const Vec3 out = vmax(vmax(b.lo - e, e - b.hi), Vec3{0, 0, 0});  // 0 on an axis inside the box
+  return length(out) < kNearEyeSigmas * sigma_median;
+}
+
 namespace {
 
 // Bump when the bake's results change, so old cache entries are not reused.
@@ -351,9 +360,12 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   uniform1i(splat, "third", 2);
   uniform1i(splat, "fourth", 3);
   uniform1i(splat, "clip_back", s.clip_back ? 1 : 0);
-  // exact_tr with a peaked phase: each light's share without its phase, which the fragment takes
-  // per view ray (kPerRayPhaseG in single_pipeline.hpp).
-  uniform1i(splat, "per_ray_phase", s.exact_tr && phase_per_ray(scene) ? 1 : 0);
+  // From inside the object the first surface is where the rays leave the medium.
+  const bool inside = mesh_.eye_inside(scene);
+  uniform1i(splat, "eye_inside", inside ? 1 : 0);
+  // exact_tr with a peaked phase or the eye near the medium: each light's share without its phase,
+  // which the fragment takes per view ray (phase_per_ray in single_pipeline.hpp).
+  uniform1i(splat, "per_ray_phase", s.exact_tr && phase_per_ray(scene, sigma_median) ? 1 : 0);
   glProgramUniform1f(splat, glGetUniformLocation(splat, "g"), float(scene.medium.g));
   set_light_uniforms(splat, scene.lights);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, s.exact_tr ? light_factors_.get() : 0);
@@ -387,7 +399,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   clock.stop("splat");
 
   if (stride > 1) {
-    result.image = upsample(out, {&front, &back, &third, &fourth}, stride, s.clip_back);
+    result.image = upsample(out, {&front, &back, &third, &fourth}, stride, s.clip_back, inside);
     clock.stop("upsample");
   } else {
     result.image = out.read_color();

@@ -38,13 +38,15 @@
 
 namespace scatter {
 
-// With exact_tr, the splat takes the phase per view ray where |g| is at least this (a peaked
-// phase is narrower than a Gaussian seen from the camera); below, per sample at its centre, which
-// costs the fragment nothing (docs/pipelines/single.md).
-inline constexpr double kPerRayPhaseG = 0.5;
-inline bool phase_per_ray(const Scene& scene) {
-  return !scene.lights.empty() && std::abs(scene.medium.g) >= kPerRayPhaseG;
-}
+// With exact_tr, the splat takes the phase per view ray where |g| is at least kPerRayPhaseG (a
+// peaked phase is narrower than a Gaussian seen from the camera), or where the eye lies within
+// kNearEyeSigmas of the samples' median sigma of the object's box (inside it too): a Gaussian
+// beside or around the eye spans a wide cone of view rays, and the direction to its centre is
+// none of theirs (from inside a box lit from the camera's side, the phase at the centres put the
+// single term 1.3x high). Elsewhere, per sample at its centre, which costs the fragment nothing
+// (docs/pipelines/single.md).
+inline constexpr double kPerRayPhaseG = 0.5, kNearEyeSigmas = 30;
+bool phase_per_ray(const Scene& scene, double sigma_median);
 
 // splat_scale 0 (auto) splats one pixel in s x s, s the largest stride (up to kMaxSplatStride)
 // at which the median Gaussian's sigma still spans this many of the splat's pixels at the
@@ -151,9 +153,10 @@ class SinglePipeline : public Pipeline {
   void shade_exact(const Scene& scene, const DrawnSamples& drawn, bool gradient, bool hessian,
                    double max_gs);
   // splat_scale: the image from `splat` (one pixel in stride x stride) and the image-size
-  // distance textures front, back, third, fourth (pipelines/single/single_upsample.cpp).
+  // distance textures front, back, third, fourth (pipelines/single/single_upsample.cpp); `inside`:
+  // the eye is inside the object (KeptMesh::eye_inside).
   Image upsample(const RenderTarget& splat, std::array<const RenderTarget*, 4> surfaces, int stride,
-                 bool clip_back);
+                 bool clip_back, bool inside);
 
   gpu::Gpu& gpu_;
   BakeCache* cache_;

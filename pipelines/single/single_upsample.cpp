@@ -9,7 +9,7 @@ namespace scatter {
 
 Image SinglePipeline::upsample(const RenderTarget& splat,
                                std::array<const RenderTarget*, 4> surfaces, int stride,
-                               bool clip_back) {
+                               bool clip_back, bool inside) {
   if (!upsample_program_)
     upsample_program_ =
         gpu::build_program("shaders/common/fullscreen.vert", "shaders/single/upsample.frag");
@@ -25,6 +25,7 @@ Image SinglePipeline::upsample(const RenderTarget& splat,
   }
   uniform1i(up, "stride", stride);
   uniform1i(up, "clip_back", clip_back ? 1 : 0);
+  uniform1i(up, "eye_inside", inside ? 1 : 0);
   glProgramUniform1f(up, glGetUniformLocation(up, "sigma_t"), float(current_.sigma_t_median));
   glProgramUniform1f(up, glGetUniformLocation(up, "depth_scale"),
                      float(4 * std::max(current_.sigma_median, 1e-6)));

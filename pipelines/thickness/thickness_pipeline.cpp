@@ -133,6 +133,7 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   }
   uniform1i(integ, "front", 0);
   uniform1i(integ, "back", 1);
+  uniform1i(integ, "eye_inside", mesh_.eye_inside(scene) ? 1 : 0);
   glBindTextureUnit(0, front.color_texture());
   glBindTextureUnit(1, back.color_texture());
   set_camera_uniforms(integ, scene);

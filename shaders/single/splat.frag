@@ -4,7 +4,8 @@
 // closed form with erf. The paper clips only at the first surface; with clip_back the ray's
 // medium is [first, second surface] and [third, fourth] (depth peeling), so that a Gaussian
 // behind the second surface adds nothing to the gap and one behind a thin part (an ear in
-// front of the head) still adds its share.
+// front of the head) still adds its share. From an eye inside the object: [eye, first] and
+// [second, third] (clip_back 0: everything ahead of the eye).
 flat in vec3 center;
 flat in vec3 gauss_sigma;  // per axis
 flat in float cutoff;
@@ -34,6 +35,7 @@ uniform sampler2D back;   // ... to the second surface
 uniform sampler2D third;  // ... to the third (0 where none)
 uniform sampler2D fourth; // ... to the fourth
 uniform int clip_back;
+uniform int eye_inside;  // the eye is inside the object: the first surface is where rays leave
 uniform vec3 eye, forward, right, up;  // right and up scaled by tan(fov / 2) (and aspect)
 uniform vec2 size;  // the image's (the depth textures')
 uniform int stride;  // this target's pixel (i, j) is the image's (stride i, stride j)
@@ -190,17 +192,28 @@ void main() {
     keep1 += tm;
   }
 #endif
-  float lo = max(x, ta), hi = y, span = 0.0;
+  // The medium along the ray: from outside [1st, 2nd] and [3rd, 4th surface]; from an eye inside
+  // the object [eye, 1st] and [2nd, 3rd]; an interval with no surface to end it stays open.
+  float lo = max(x, eye_inside != 0 ? 0.0 : ta), hi = y, span = 0.0;
   float log_amp = log_scale - 0.5 * q;
   if (clip_back != 0) {
     float tb = texelFetch(back, px, 0).r;
-    if (tb > ta) hi = min(hi, tb);
     float t3 = texelFetch(third, px, 0).r;
-    if (t3 > tb && tb > ta) {
-      float t4 = texelFetch(fourth, px, 0).r;
-      float hi2 = t4 > t3 ? min(y, t4) : y;
-      float lo2 = max(x, t3);
-      if (hi2 > lo2) span += kept_span(lo2, hi2, keep0, keep1, tc, k, log_amp);
+    if (eye_inside != 0) {
+      hi = min(hi, ta);
+      if (tb > ta) {
+        float hi2 = t3 > tb ? min(y, t3) : y;
+        float lo2 = max(x, tb);
+        if (hi2 > lo2) span += kept_span(lo2, hi2, keep0, keep1, tc, k, log_amp);
+      }
+    } else {
+      if (tb > ta) hi = min(hi, tb);
+      if (t3 > tb && tb > ta) {
+        float t4 = texelFetch(fourth, px, 0).r;
+        float hi2 = t4 > t3 ? min(y, t4) : y;
+        float lo2 = max(x, t3);
+        if (hi2 > lo2) span += kept_span(lo2, hi2, keep0, keep1, tc, k, log_amp);
+      }
     }
   }
   if (hi > lo) span += kept_span(lo, hi, keep0, keep1, tc, k, log_amp);

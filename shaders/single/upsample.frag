@@ -10,18 +10,29 @@ uniform sampler2D low;  // the evaluated pixels: this pixel's (stride i, stride 
 uniform sampler2D front, back, third, fourth;  // distances to the surfaces (0 where none)
 uniform int stride;
 uniform int clip_back;      // 0: the splat clipped at the first surface only (guide 1)
+uniform int eye_inside;     // the eye is inside the object (the splat's intervals, splat.frag)
 uniform float sigma_t;      // the guide's extinction (the medium's median)
 uniform float depth_scale;  // a neighbour's weight falls as exp(-(depth difference / this)^2)
 
 layout(location = 0) out vec4 radiance;
 
-// The chord of both intervals (the second only where a third surface lies behind the second).
+// The chord of both intervals (the second only where a surface lies behind the one that ends the
+// first): from outside [1st, 2nd] and [3rd, 4th], from an eye inside [eye, 1st] and [2nd, 3rd].
 float chord(ivec2 p, out float ta, out float tb) {
   ta = texelFetch(front, p, 0).r;
   tb = texelFetch(back, p, 0).r;
-  if (clip_back == 0 || tb <= ta) return -1.0;  // unbounded: an open mesh, or front-only clipping
-  float L = tb - ta;
+  if (clip_back == 0) return -1.0;  // unbounded: front-only clipping
   float t3 = texelFetch(third, p, 0).r;
+  if (eye_inside != 0) {
+    float L = ta;
+    if (tb > ta) {
+      if (t3 <= tb) return -1.0;  // an open mesh
+      L += t3 - tb;
+    }
+    return L;
+  }
+  if (tb <= ta) return -1.0;  // an open mesh
+  float L = tb - ta;
   if (t3 > tb) {
     float t4 = texelFetch(fourth, p, 0).r;
     if (t4 <= t3) return -1.0;

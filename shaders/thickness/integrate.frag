@@ -1,6 +1,6 @@
 #version 450 core
 // Single scattering in a homogeneous medium between the first surface A and the second B along
-// each view ray (depth peeling), lit through the shadow maps. The segment is cut into `steps`
+// each view ray (depth peeling; from an eye inside the object, between the eye and the first), lit through the shadow maps. The segment is cut into `steps`
 // pieces; the light's path length inside the medium |Cc| is read from the light's shadow map at
 // the pieces' ends C, and over each piece [0, h] the transmittance along both paths,
 // exp(-sigma_t (u + |Cc|(u))), is integrated exactly for |Cc| linear between its ends:
@@ -13,6 +13,7 @@ const float PI = 3.14159265358979;
 
 uniform sampler2D front;  // distance from the eye to the first surface (0 where none)
 uniform sampler2D back;   // ... to the second surface
+uniform int eye_inside;   // the eye is inside the object: the medium is [eye, first surface]
 uniform sampler2D shadow_maps[MAX_LIGHTS];
 uniform mat4 light_matrix[MAX_LIGHTS];  // world -> light clip space
 uniform int light_count;
@@ -83,7 +84,12 @@ vec3 light_at(int i, vec3 c, vec3 d, out float inside) {
 void main() {
   ivec2 px = ivec2(gl_FragCoord.xy);
   float ta = texelFetch(front, px, 0).r, tb = texelFetch(back, px, 0).r;
-  if (ta <= 0.0 || tb <= ta) {
+  // From an eye inside the object the ray starts in the medium and leaves it at the first surface.
+  if (eye_inside != 0 && ta > 0.0) {
+    tb = ta;
+    ta = 0.0;
+  }
+  if (tb <= 0.0 || tb <= ta) {
     radiance = vec4(0.0);
     return;
   }

@@ -3,6 +3,7 @@
 // single-scattered radiance is sigma_s p(-1) E (1 - exp(-4 sigma_t)) / (2 sigma_t).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -22,10 +23,14 @@ inline Scene axis_box(double sigma_s, double sigma_a, double g) {
   return parse_scene(j, ".");
 }
 
-inline double axis_box_radiance(double sigma_s, double sigma_a, double g) {
-  double st = sigma_s + sigma_a;
+// The centre ray's radiance seen from (0, 0, z0) on the axis, z0 in [-1, 1] inside the box or
+// z0 >= 1 outside: the point at height z lies 1 - z from the lit face and min(z0, 1) - z from
+// where the ray enters, so L = sigma_s p E integral_{-1}^{z1} exp(-sigma_t (1 + z1 - 2 z)) dz
+// = sigma_s p E (exp(-sigma_t (1 - z1)) - exp(-sigma_t (3 + z1))) / (2 sigma_t), z1 = min(z0, 1).
+inline double axis_box_radiance(double sigma_s, double sigma_a, double g, double z0 = 4) {
+  double st = sigma_s + sigma_a, z1 = std::min(z0, 1.0);
   double p = (1 - g * g) / (4 * std::numbers::pi * std::pow(1 + g, 3));  // HG at cos = -1
-  return sigma_s * p * 2.0 * (1 - std::exp(-4 * st)) / (2 * st);
+  return sigma_s * p * 2.0 * (std::exp(-st * (1 - z1)) - std::exp(-st * (3 + z1))) / (2 * st);
 }
 
 }  // namespace scatter::test

@@ -124,6 +124,23 @@ TEST_P(Conformance, AxisBoxSingleTermMatchesClosedForm) {
     EXPECT_NEAR(img.at(4, 4)[c], expected, tolerance(GetParam()) * expected) << c;
 }
 
+// The same box seen from inside, on its axis halfway between the centre and the lit face: every
+// view ray starts in the medium, and the first surface depth peeling finds is where it leaves.
+TEST_P(Conformance, AxisBoxSingleTermFromInside) {
+  if (!info().renders(Terms::Single))
+    GTEST_SKIP() << GetParam() << " does not render the single term";
+  const double ss = 0.8, sa = 0.2, g = box_g(GetParam()), z0 = 0.5;
+  Scene box = test::axis_box(ss, sa, g);
+  box.camera.position = {0, 0, z0};
+  box.camera.target = {0, 0, -1};
+  box.camera.fov_deg = 60;
+  auto p = make_pipeline(GetParam(), test::shared_gpu());
+  Image img = p->render(box, request(Terms::Single)).image;
+  const double expected = test::axis_box_radiance(ss, sa, g, z0);
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(img.at(4, 4)[c], expected, tolerance(GetParam()) * expected) << c;
+}
+
 // The box seen from below its centre sits in the image's upper half: rows 0-3 hold more light
 // than rows 5-8.
 TEST_P(Conformance, RowZeroIsTheTop) {
