@@ -61,8 +61,9 @@ CostEstimate LblPipeline::estimate(const Scene& scene, const RenderRequest& requ
   // lobes (light_lobes > 1): each light's deposit 12 B and flow 24 B a node.
   const int lobes = lbl::light_lobes(scene, s);
   if (lobes > 1)
-    l.device("scene.lights", n * 36.0 * lobes,
-             std::to_string(lobes) + " lights x " + grid + " x 36 B (each light's deposit)");
+    l.device(
+        "scene.lights", n * 36.0 * lobes,
+        std::to_string(lobes) + " lobes x " + grid + " x 36 B (each light's or group's deposit)");
 
   // Volume: measured 72^3 0.37-0.55 s, 104^3 1.75 s (~1.5 us a node with the voxelizer).
   // What a kept state skips (Pipeline::keeps): everything but the view.

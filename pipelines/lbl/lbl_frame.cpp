@@ -1,5 +1,8 @@
 #include "pipelines/lbl/lbl_frame.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "bake/cache.hpp"
 #include "core/errors.hpp"
 #include "pipelines/asset_key.hpp"
@@ -75,10 +78,73 @@ bool uses_second(const LblSettings& s) {
 
 int light_lobes(const Scene& scene, const LblSettings& s) {
   const int lights = static_cast<int>(scene.lights.size());
-  if (scene.medium.g == 0 || lights < 2 || lights > s.lobes || s.interleave > 0) return 1;
+  if (scene.medium.g == 0 || lights < 2 || s.interleave > 0) return 1;
   const int margin = 1 + static_cast<int>(std::ceil(3 * s.smooth));
   const double nodes = cost::grid_shape(scene, margin, s.blocked ? s.block : 1).count();
-  return lights * 36.0 * nodes <= kMaxLobeBytes ? lights : 1;
+  const double fit = std::floor(kMaxLobeBytes / (36.0 * std::max(nodes, 1.0)));
+  const int lobes = static_cast<int>(std::min({double(lights), double(s.lobes), fit}));
+  return lobes >= 2 ? lobes : 1;
+}
+
+std::vector<std::vector<int>> light_groups(const Scene& scene, int lobes) {
+  const int n = static_cast<int>(scene.lights.size());
+  lobes = std::clamp(lobes, 1, std::max(n, 1));
+  std::vector<std::vector<int>> groups(static_cast<size_t>(lobes));
+  if (lobes == n) {
+    for (int i = 0; i < n; ++i) groups[size_t(i)] = {i};
+    return groups;
+  }
+  // Each light's direction from the object's centre.
+  const Vec3 centre = scene.mesh->bounds().center();
+  std::vector<Vec3> dir(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const Light& l = scene.lights[size_t(i)];
+    Vec3 d = l.type == Light::Type::Directional ? -l.direction : l.position - centre;
+    dir[size_t(i)] = length(d) > 0 ? d / length(d) : Vec3{0, 0, 1};
+  }
+  // Centres: the first light, then each time the light least like every centre so far.
+  std::vector<Vec3> c = {dir[0]};
+  while (int(c.size()) < lobes) {
+    int far = 0;
+    double worst = 2;
+    for (int i = 0; i < n; ++i) {
+      double best = -2;
+      for (const Vec3& m : c) best = std::max(best, dot(dir[size_t(i)], m));
+      if (best < worst) worst = best, far = i;
+    }
+    c.push_back(dir[size_t(far)]);
+  }
+  std::vector<int> of(static_cast<size_t>(n), -1);
+  for (int iteration = 0; iteration < 16; ++iteration) {
+    bool moved = false;
+    for (int i = 0; i < n; ++i) {
+      int best = 0;
+      for (int k = 1; k < lobes; ++k)
+        if (dot(dir[size_t(i)], c[size_t(k)]) > dot(dir[size_t(i)], c[size_t(best)])) best = k;
+      moved |= of[size_t(i)] != best;
+      of[size_t(i)] = best;
+    }
+    if (!moved) break;
+    for (int k = 0; k < lobes; ++k) {
+      Vec3 sum{0, 0, 0};
+      for (int i = 0; i < n; ++i)
+        if (of[size_t(i)] == k) sum = sum + dir[size_t(i)];
+      if (length(sum) > 0) c[size_t(k)] = sum / length(sum);
+    }
+  }
+  // A centre no light chose (lights in fewer distinct directions than lobes): its group takes a
+  // light from the largest group, so that every deposit holds one.
+  for (int i = 0; i < n; ++i) groups[size_t(of[size_t(i)])].push_back(i);
+  for (auto& g : groups) {
+    if (!g.empty()) continue;
+    auto largest = std::max_element(groups.begin(), groups.end(), [](const auto& a, const auto& b) {
+      return a.size() < b.size();
+    });
+    g.push_back(largest->back());
+    largest->pop_back();
+  }
+  std::sort(groups.begin(), groups.end());
+  return groups;
 }
 
 Decision decide(const State* state, const Scene& scene, const RenderRequest& request,
@@ -168,18 +234,24 @@ Plan make_plan(const Scene& scene, Terms terms, const LblSettings& s, const Deci
   const int lobes = light_lobes(scene, s);
   const size_t lights = scene.lights.size();
   std::string lobe_text;
-  if (lobes > 1)
+  if (lobes > 1 && size_t(lobes) == lights)
     lobe_text =
         "; each light's deposit and direction kept apart (the single term by each "
         "light's phase lobe)";
+  else if (lobes > 1)
+    lobe_text = "; the lights grouped by direction into " + std::to_string(lobes) + " deposits (" +
+                (lights > size_t(s.lobes) ? "more lights than lobes " + std::to_string(s.lobes)
+                                          : std::string("the lights' deposits would take over "
+                                                        "512 MiB")) +
+                "), each group's kept apart (the single term by each group's phase lobe about "
+                "its mean direction)";
   else if (scene.medium.g != 0 && lights > 1)
     lobe_text =
         "; the lights' deposits summed, the single term by one phase lobe about their "
         "mean direction (" +
-        std::string(s.interleave > 0           ? "interleaved march"
-                    : lights > size_t(s.lobes) ? "more lights than lobes " + std::to_string(s.lobes)
-                                               : "the lights' deposits would "
-                                                 "take over 512 MiB") +
+        std::string(s.interleave > 0 ? "interleaved march"
+                    : s.lobes < 2    ? "lobes " + std::to_string(s.lobes)
+                                     : "two lights' deposits would take over 512 MiB") +
         ")";
   p.stages.push_back({"march", d.march,
                       d.march ? std::to_string(lights) + " lights, " + short_number(s.rays) +

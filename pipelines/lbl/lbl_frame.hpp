@@ -62,11 +62,17 @@ bool uses_tms(const Scene& scene, const LblSettings& s);
 // The lattice starts from the light's exactly computed second scattering (setting second; the
 // 6-direction lattice, not interleaved with the march).
 bool uses_second(const LblSettings& s);
-// How many deposits the march keeps apart, one per light (setting lobes): the scene's lights
-// when g != 0, there are 2 to `lobes` of them, the march is not interleaved and their deposits
-// (36 B a node each, on the grid the cost estimate takes) fit kMaxLobeBytes; otherwise 1 (one
-// deposit, its phase lobe about the lights' mean direction).
+// How many deposits the march keeps apart (setting lobes), each with its own phase lobe about
+// its light's mean direction: when g != 0, there are 2 or more lights and the march is not
+// interleaved, the least of the lights, `lobes` and what fits kMaxLobeBytes (36 B a node each,
+// on the grid the cost estimate takes); 1 (one deposit, one lobe about all the lights' mean
+// direction) where that is under 2.
 int light_lobes(const Scene& scene, const LblSettings& s);
+// The lights of each of `lobes` deposits: each light alone when there are as many lobes as
+// lights, else grouped by direction (seen from the mesh's centre; directional lights by theirs),
+// spherical k-means from the farthest-apart lights, deterministic. Every light in exactly one
+// group, none empty; groups in the order of their first light.
+std::vector<std::vector<int>> light_groups(const Scene& scene, int lobes);
 
 // Which stages a frame runs, from the scene, the request and what the last frame left.
 struct Decision {

@@ -19,8 +19,9 @@ const SettingsTable<LblSettings>& lbl_settings() {
        setting("lobes", &S::lobes, 1, lbl::kMaxLobes, kept("lights"),
                "with g != 0 and several lights, up to this many lights each keep their own "
                "deposit and direction, so that the single term (and the forward-scattered light) "
-               "takes each light's phase lobe (36 B a node a light); more lights than that, or 1, "
-               "share one lobe about their mean direction"),
+               "takes each light's phase lobe (36 B a node a lobe); more lights than that are "
+               "grouped by direction into that many lobes, each about its group's mean "
+               "direction; 1: one lobe about all the lights' mean direction"),
        flag("blocked", &S::blocked, kept("material"),
             "1: the paper's blocks with interface buffers; 0: the global lattice (faster on a CPU "
             "device)"),

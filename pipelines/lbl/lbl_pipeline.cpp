@@ -119,15 +119,18 @@ RenderResult LblPipeline::render(const Scene& scene, const RenderRequest& reques
       queue.enqueueFillBuffer(*b, 0.f, 0, 3 * st.volume.count() * sizeof(float));
     if (with_flow) queue.enqueueFillBuffer(st.flow, 0.f, 0, 6 * st.volume.count() * sizeof(float));
     if (lobes > 1) {
-      // Each light marched alone, its deposit and flow copied out (the lattice's source, which
-      // only the diffusion reads, summed over them as before).
+      // Each light (or group of lights, light_groups) marched alone, its deposit and flow copied
+      // out (the lattice's source, which only the diffusion reads, summed over them as before).
       const size_t bytes = 3 * st.volume.count() * sizeof(float);
       if (!st.lobe_deposit() || st.lobe_deposit.getInfo<CL_MEM_SIZE>() != lobes * bytes) {
         st.lobe_deposit = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, lobes * bytes);
         st.lobe_flow = cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 2 * lobes * bytes);
       }
+      const std::vector<std::vector<int>> groups = lbl::light_groups(scene, lobes);
       for (int i = 0; i < lobes; ++i) {
-        rays = lbl::light_rays({scene.lights[i]}, st.volume, s.rays, 4096);
+        std::vector<Light> group;
+        for (int l : groups[size_t(i)]) group.push_back(scene.lights[size_t(l)]);
+        rays = lbl::light_rays(group, st.volume, s.rays, 4096);
         ray_buf = upload(cl, rays.rays);
         if (i > 0) {
           queue.enqueueFillBuffer(st.deposit, 0.f, 0, bytes);

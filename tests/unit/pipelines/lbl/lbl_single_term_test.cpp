@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "../../test_util.hpp"
+#include "pipelines/lbl/lbl_frame.hpp"
 #include "pipelines/lbl/lbl_pipeline.hpp"
 #include "protocol/json_reader.hpp"
 
@@ -99,6 +100,40 @@ TEST(LblPipeline, SeveralLightsTakeEachLightsPhaseLobe) {
   RenderResult one_lobe = shared.render(both, {Terms::Single, {{"lobes", 1}}});
   EXPECT_GT(one_lobe.image.at(4, 4).x, 5 * expected);
   EXPECT_NE(stage(one_lobe.plan, "march")->reason.find("one phase lobe"), std::string::npos);
+}
+
+// More lights than lobes: four suns, two 0.15 rad above and below +x, two about -x, and lobes 2.
+// Grouped by direction, each pair keeps its own deposit and a lobe about its mean direction m,
+// |m| = cos 0.15, which the view pass takes as HG(g |m|): on the centre ray (90 degrees from
+// every light) HG(g |m|, 0) / HG(g, 0) = 1.11 times a lobe per light. One lobe about all four's
+// mean direction, which cancels, is 5x off.
+TEST(LblPipeline, MoreLightsThanLobesAreGroupedByDirection) {
+  const double st = 2.0, g = 0.9;
+  Scene four = axis_box(0.8 * st, 0.2 * st, 31);
+  four.medium.g = g;
+  four.lights.assign(4, four.lights[0]);
+  const double a = std::sin(0.15), b = std::cos(0.15);
+  four.lights[0].direction = {b, a, 0};
+  four.lights[1].direction = {-b, a, 0};
+  four.lights[2].direction = {b, -a, 0};
+  four.lights[3].direction = {-b, -a, 0};
+  const std::vector<std::vector<int>> groups = lbl::light_groups(four, 2);
+  EXPECT_EQ(groups, (std::vector<std::vector<int>>{{0, 2}, {1, 3}}));
+  EXPECT_EQ(lbl::light_groups(four, 4), (std::vector<std::vector<int>>{{0}, {1}, {2}, {3}}));
+  EXPECT_EQ(lbl::light_groups(four, 1), (std::vector<std::vector<int>>{{0, 1, 2, 3}}));
+
+  LblPipeline each(test::shared_gpu());
+  const double own = each.render(four, {Terms::Single, {}}).image.at(4, 4).x;
+  LblPipeline paired(test::shared_gpu());
+  RenderResult r = paired.render(four, {Terms::Single, {{"lobes", 2}}});
+  auto hg90 = [](double gg) { return (1 - gg * gg) / std::pow(1 + gg * gg, 1.5); };
+  const double lobe = own * hg90(g * b) / hg90(g);
+  EXPECT_NEAR(r.image.at(4, 4).x, lobe, 0.02 * lobe);
+  EXPECT_NE(stage(r.plan, "march")->reason.find("grouped by direction into 2 deposits"),
+            std::string::npos)
+      << stage(r.plan, "march")->reason;
+  LblPipeline shared(test::shared_gpu());
+  EXPECT_GT(shared.render(four, {Terms::Single, {{"lobes", 1}}}).image.at(4, 4).x, 5 * own);
 }
 
 }  // namespace
