@@ -61,18 +61,28 @@ float march_segment(const Grid* g, __global const float* sigma_s, __global const
   dda_init(&s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), a0, a1);
   float tr = 1.0f, radiance = 0.0f, a, b;
   float e0[MAX_MARCH_LIGHTS], tau0[MAX_MARCH_LIGHTS];
+  // What the rest of the ray may still add, at most tr times the light reaching this voxel
+  // unattenuated (albedo and the light's transmittance at most 1): the march stops once that is
+  // under 1e-6 of what it has, or the view transmittance is under 1e-7 with no light here. A
+  // cut-off on tr alone lost the light of a ray that runs towards a light through the medium
+  // (its light transmittance rises as the view's falls: 0.31 of the value seen from inside a
+  // dense box, docs/STRESS.md).
+  float reach = INFINITY;
   int3 c;
-  while (dda_next(&s, &a, &b, &c) && tr > 1e-7f) {
+  while (dda_next(&s, &a, &b, &c) && tr > 0.0f && (tr > 1e-7f || tr * reach > 1e-6f * radiance)) {
     int v = 3 * voxel_index(g, c.x, c.y, c.z) + ch;
     float st = sigma_t[v], ss = sigma_s[v];
     if (st <= 0.0f || b <= a) continue;  // a ray through a voxel's edge gives an empty segment
     int n = max(1, (int)ceil((b - a) / (step * g->voxel)));
     float h = (b - a) / n;
     float seg_tr = exp(-st * h);
-    for (int l = 0; l < light_count; ++l)
+    reach = 0.0f;
+    for (int l = 0; l < light_count; ++l) {
       e0[l] = unattenuated(g, sigma_t, lights, l, g_phase, ch, o + d * (a + FACE_INSET * h), d,
                            bvh, ior, use_mesh, &tau0[l]);
-    for (int k = 0; k < n && tr > 1e-7f; ++k) {
+      reach += e0[l];
+    }
+    for (int k = 0; k < n && tr > 0.0f && (tr > 1e-7f || tr * reach > 1e-6f * radiance); ++k) {
       // The ends' offsets in the sub-step: [u0, u1] within [0, h].
       float u0 = k == 0 ? FACE_INSET * h : 0.0f, u1 = k == n - 1 ? (1.0f - FACE_INSET) * h : h;
       float3 p1 = o + d * (a + k * h + u1);
