@@ -36,21 +36,21 @@ const MeshBuffers& KeptMesh::get(const Scene& scene) {
 }
 
 bool KeptMesh::eye_inside(const Scene& scene) {
-  const Vec3& e = scene.camera.position;
-  const Aabb b = scene.shape ? scene.shape->bounds() : scene.mesh->bounds();
+  // The mesh that is depth-peeled decides (a procedural shape's tessellation, not the exact
+  // shape: an eye between the two would get the wrong intervals), at a point a hair ahead of the
+  // eye, where its rays are: an eye on a face then counts as inside when it looks in.
+  const Mesh& mesh = *scene.mesh;
+  const Aabb b = mesh.bounds();
+  const double hair = 1e-6 * std::max(length(b.size()), 1e-30);
+  const Vec3 e = scene.camera.position + camera_frame(scene.camera, 1, 1).forward * hair;
   if (e.x < b.lo.x || e.y < b.lo.y || e.z < b.lo.z || e.x > b.hi.x || e.y > b.hi.y || e.z > b.hi.z)
     return false;
-  std::vector<char> inside;
-  if (scene.shape) {
-    make_shape_solid(*scene.shape)->classify_column(e.x, e.y, {e.z}, inside);
-    return inside[0] != 0;
-  }
-  std::string key = mesh_key(scene);
-  if (!solid_ || key != solid_key_) {
+  if (!solid_ || solid_mesh_ != scene.mesh) {
+    solid_.reset();  // before the mesh it refers to
     solid_mesh_ = scene.mesh;
     solid_ = make_mesh_solid(*solid_mesh_);
-    solid_key_ = std::move(key);
   }
+  std::vector<char> inside;
   solid_->classify_column(e.x, e.y, {e.z}, inside);
   return inside[0] != 0;
 }

@@ -41,17 +41,17 @@ std::string mesh_key(const Scene& scene);
 class KeptMesh {
  public:
   const MeshBuffers& get(const Scene& scene);
-  // Whether the camera is inside the object (the exact shape's test, else the mesh's parity, its
-  // solid kept while the mesh stays the same): then every view ray starts in the medium, and the
-  // first surface depth peeling finds is where it leaves, so the medium along the ray is [eye,
-  // 1st], [2nd, 3rd] rather than [1st, 2nd], [3rd, 4th]. A camera outside the mesh's box costs a
-  // box test.
+  // Whether the camera is inside the object (the drawn mesh's parity just ahead of the eye, its
+  // solid kept while the scene holds the same mesh): then every view ray starts in the medium,
+  // and the first surface depth peeling finds is where it leaves, so the medium along the ray is
+  // [eye, 1st], [2nd, 3rd] rather than [1st, 2nd], [3rd, 4th]. A camera outside the mesh's box
+  // costs a box test.
   bool eye_inside(const Scene& scene);
 
  private:
-  std::string key_, solid_key_;
+  std::string key_;
   std::unique_ptr<MeshBuffers> mesh_;
-  std::shared_ptr<const Mesh> solid_mesh_;  // what solid_ refers to
+  std::shared_ptr<const Mesh> solid_mesh_;  // what solid_ refers to (declared first: dies last)
   std::unique_ptr<Solid> solid_;
 };
 

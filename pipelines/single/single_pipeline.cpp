@@ -365,7 +365,26 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   uniform1i(splat, "eye_inside", inside ? 1 : 0);
   // exact_tr with a peaked phase or the eye near the medium: each light's share without its phase,
   // which the fragment takes per view ray (phase_per_ray in single_pipeline.hpp).
-  uniform1i(splat, "per_ray_phase", s.exact_tr && phase_per_ray(scene, sigma_median) ? 1 : 0);
+  const bool per_ray = s.exact_tr && phase_per_ray(scene, current_.sigma_median);
+  uniform1i(splat, "per_ray_phase", per_ray ? 1 : 0);
+  for (StagePlan& stage : result.plan.stages) {
+    if (stage.name == "depth_peel" && inside)
+      stage.reason = s.clip_back ? "four surfaces, the eye inside the object: the medium along "
+                                   "each ray is [eye, 1st] and [2nd, 3rd]"
+                                 : "the eye inside the object: the medium is all ahead of it";
+    if (stage.name == "shade" && inside && !s.exact_tr)
+      stage.reason +=
+          "; the eye is inside the object, where the SH's transmittance (to the boundary, past "
+          "the eye) is not the eye's: exact_tr 1 computes it";
+    if (stage.name == "phase" && per_ray)
+      stage.reason = "Henyey-Greenstein g " + std::to_string(scene.medium.g) +
+                     " evaluated per view ray towards each light in the splat (" +
+                     (std::abs(scene.medium.g) >= kPerRayPhaseG
+                          ? "a peaked phase"
+                          : "the eye near the medium: a Gaussian near it spans a wide cone of "
+                            "rays") +
+                     ")";
+  }
   glProgramUniform1f(splat, glGetUniformLocation(splat, "g"), float(scene.medium.g));
   set_light_uniforms(splat, scene.lights);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, s.exact_tr ? light_factors_.get() : 0);

@@ -40,7 +40,8 @@ namespace scatter {
 
 // With exact_tr, the splat takes the phase per view ray where |g| is at least kPerRayPhaseG (a
 // peaked phase is narrower than a Gaussian seen from the camera), or where the eye lies within
-// kNearEyeSigmas of the samples' median sigma of the object's box (inside it too): a Gaussian
+// kNearEyeSigmas of the bake's median sigma (the whole set's, so that coarse frames agree) of the
+// object's box (inside it too): a Gaussian
 // beside or around the eye spans a wide cone of view rays, and the direction to its centre is
 // none of theirs (from inside a box lit from the camera's side, the phase at the centres put the
 // single term 1.3x high). Elsewhere, per sample at its centre, which costs the fragment nothing

@@ -111,7 +111,7 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
   cl.queue().enqueueReadBuffer(cl_axes_, CL_TRUE, 0, axes.size() * sizeof(float), axes.data());
   cl.queue().enqueueReadBuffer(cl_cut_, CL_TRUE, 0, cut.size() * sizeof(float), cut.data());
   // The per-light shares only where the splat reads them (no readback on the hot path otherwise).
-  const bool per_ray = phase_per_ray(scene, current_.sigma_median * drawn.sigma_scale);
+  const bool per_ray = phase_per_ray(scene, current_.sigma_median);
   std::vector<float> shares(per_ray ? per_light_floats : 0, 0.f);
   if (per_ray)
     cl.queue().enqueueReadBuffer(cl_light_factor_, CL_TRUE, 0,

@@ -133,7 +133,11 @@ RenderResult ThicknessPipeline::render(const Scene& scene, const RenderRequest& 
   }
   uniform1i(integ, "front", 0);
   uniform1i(integ, "back", 1);
-  uniform1i(integ, "eye_inside", mesh_.eye_inside(scene) ? 1 : 0);
+  const bool inside = mesh_.eye_inside(scene);
+  uniform1i(integ, "eye_inside", inside ? 1 : 0);
+  for (StagePlan& stage : result.plan.stages)
+    if (stage.name == "depth_peel" && inside)
+      stage.reason = "the eye inside the object: from the eye to the first surface along each ray";
   glBindTextureUnit(0, front.color_texture());
   glBindTextureUnit(1, back.color_texture());
   set_camera_uniforms(integ, scene);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "../test_util.hpp"
 #include "axis_box.hpp"
@@ -86,8 +87,9 @@ TEST_P(Conformance, SettingsTableIsWhatValidationEnforces) {
     EXPECT_NO_THROW(i.validate({{s.key, s.def}}));
     EXPECT_THROW(i.validate({{s.key, s.hi + std::max(1.0, std::abs(s.hi))}}), ValidationError);
     EXPECT_THROW(i.validate({{s.key, s.lo - std::max(1.0, std::abs(s.lo))}}), ValidationError);
-    if (s.kind != SettingKind::Number)
+    if (s.kind != SettingKind::Number) {
       EXPECT_THROW(i.validate({{s.key, s.lo + 0.5}}), ValidationError);
+    }
   }
   for (const Quality& q : i.qualities) EXPECT_NO_THROW(i.validate(q.settings)) << q.name;
   EXPECT_TRUE(std::find(i.terms.begin(), i.terms.end(), i.default_terms) != i.terms.end());
@@ -139,6 +141,30 @@ TEST_P(Conformance, AxisBoxSingleTermFromInside) {
   const double expected = test::axis_box_radiance(ss, sa, g, z0);
   for (int c = 0; c < 3; ++c)
     EXPECT_NEAR(img.at(4, 4)[c], expected, tolerance(GetParam()) * expected) << c;
+}
+
+// The same box seen from a point on its faces: on the lit face looking in (as from outside), and
+// on the opposite face looking in towards the light, where every point of the axis lies 2 from
+// the eye and the lit face together: L = sigma_s HG(1) E 2 exp(-2 sigma_t). The eye's own face
+// is edge-on to it (never drawn): a hair ahead of the eye is inside.
+TEST_P(Conformance, AxisBoxSingleTermFromItsFaces) {
+  if (!info().renders(Terms::Single))
+    GTEST_SKIP() << GetParam() << " does not render the single term";
+  const double ss = 0.8, sa = 0.2, st = ss + sa, g = box_g(GetParam());
+  auto p = make_pipeline(GetParam(), test::shared_gpu());
+  Scene box = test::axis_box(ss, sa, g);
+  box.camera.fov_deg = 60;
+  box.camera.position = {0, 0, 1};
+  box.camera.target = {0, 0, -1};
+  const double top = test::axis_box_radiance(ss, sa, g, 1);
+  Image img = p->render(box, request(Terms::Single)).image;
+  EXPECT_NEAR(img.at(4, 4).x, top, tolerance(GetParam()) * top) << "on the lit face";
+  box.camera.position = {0, 0, -1};
+  box.camera.target = {0, 0, 1};
+  const double forward = (1 - g * g) / (4 * std::numbers::pi * std::pow(1 - g, 3));
+  const double bottom = ss * forward * 2.0 * 2 * std::exp(-2 * st);
+  img = p->render(box, request(Terms::Single)).image;
+  EXPECT_NEAR(img.at(4, 4).x, bottom, tolerance(GetParam()) * bottom) << "on the far face";
 }
 
 // The box seen from below its centre sits in the image's upper half: rows 0-3 hold more light
