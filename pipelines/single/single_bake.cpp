@@ -256,8 +256,8 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
       q_min = std::min(q_min, q[v]);
     }
   const double r_estimate = std::cbrt(medium_volume / (4 * std::sqrt(2.0) * p.samples));
-  const int shell =
-      std::clamp(int(std::ceil(2.5 * p.radius * 2 * r_estimate * q_min / g.voxel)), 1, kMaxShell);
+  const double sigma_least = std::max(p.radius * 2 * r_estimate * q_min, kMinSigmaVoxels * g.voxel);
+  const int shell = std::clamp(int(std::ceil(2.5 * sigma_least / g.voxel)), 1, kMaxShell);
   // anchor: for a shell voxel, a medium voxel it was reached from; its samples read their optical
   // depth there (shifted by the same offset), since from outside a convex surface a grazing light
   // or view direction misses the medium that the Gaussian covers inside.
@@ -337,8 +337,10 @@ SingleBake bake_single(gpu::ClContext& cl, const VoxelGrid& g, const SingleBakeP
     bake.position.insert(bake.position.end(), {float(x.x), float(x.y), float(x.z)});
     Vec3 xd = x + (voxel_centre(anchor[cvoxel[c]]) - voxel_centre(cvoxel[c]));
     depth_position.insert(depth_position.end(), {float(xd.x), float(xd.y), float(xd.z)});
-    // Local spacing: twice the Poisson radius, scaled by the local relative radius.
-    bake.sigma.push_back(static_cast<float>(p.radius * 2 * kept.base_radius * cq[c]));
+    // Local spacing: twice the Poisson radius, scaled by the local relative radius; sigma at
+    // least kMinSigmaVoxels of a voxel.
+    bake.sigma.push_back(static_cast<float>(
+        std::max(p.radius * 2 * kept.base_radius * cq[c], kMinSigmaVoxels * g.voxel)));
   }
   clock.stop("sampling");
   report("sampling", 1);

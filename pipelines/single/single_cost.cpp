@@ -99,12 +99,15 @@ CostEstimate SinglePipeline::estimate(const Scene& scene, const RenderRequest& r
     frame.time("settings.samples", 2 * drawn * (1 + lights) * side * 20e-9,
                std::to_string(int(std::lround(drawn))) + " samples x " +
                    std::to_string(int(lights + 1)) + " rays");
-  const double overlap = 9 * std::cbrt(drawn);
   // splat_scale: one pixel in stride x stride splatted (auto: by the sigma the spacing of
-  // `samples` in the mesh's box gives).
+  // `samples` in the mesh's box gives, at least kMinSigmaVoxels; a sigma floored above the
+  // spacing's widens each pixel's tube of Gaussians by its square).
   Aabb box = scene.mesh->bounds();
   const Vec3 size = box.size();
-  const double sigma = p.radius * std::cbrt(size.x * size.y * size.z / drawn);
+  const double spaced = p.radius * std::cbrt(size.x * size.y * size.z / drawn);
+  const double least = kMinSigmaVoxels * std::max({size.x, size.y, size.z}) / scene.voxels;
+  const double sigma = std::max(spaced, least);
+  const double overlap = 9 * std::cbrt(drawn) * (sigma / spaced) * (sigma / spaced);
   const int stride = splat_stride(s.splat_scale, sigma, scene);
   frame.time("scene.image.width",
              px * coverage(scene) * overlap * 60e-9 / (stride * stride) + px * 4 * 200e-9,

@@ -30,7 +30,8 @@ bool phase_per_ray(const Scene& scene, double sigma_median) {
 namespace {
 
 // Bump when the bake's results change, so old cache entries are not reused.
-constexpr const char* kSingleBakeVersion = "single-8";  // 8: samples in progressive order
+// 8: samples in progressive order; 9: sigma at least kMinSigmaVoxels
+constexpr const char* kSingleBakeVersion = "single-9";
 
 }  // namespace
 

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -313,6 +314,29 @@ TEST(SingleBakeCache, SecondBakeIsAByteIdenticalHitAndCorruptionIsRebaked) {
     SinglePipeline p(test::shared_gpu(), &cache);
     EXPECT_TRUE(p.bake(small_sphere(32, 16), request).cache_hit);  // the re-bake was stored
   }
+}
+
+// Many samples on a coarse grid: a box of 8^3 voxels at 12,000 samples, whose Poisson spacing
+// would give Gaussians of sigma 0.2 voxels. The weights hold the sum of Gaussians at one at the
+// voxel centres only, so sigma is kept at kMinSigmaVoxels of a voxel or more: 1.6 % from the
+// reference marcher (21.8 % without the floor).
+TEST_F(SinglePipelineTest, ManySamplesOnACoarseGridKeepTheirGaussiansWide) {
+  nlohmann::json j = test::minimal_scene();
+  j["mesh"] = {{"shape", "box"}, {"size", {2, 2, 2}}};  // voxel faces on the box's faces
+  j["medium"] = {{"sigma_s", 0.2}, {"sigma_a", 0.05}, {"g", 0.3}};
+  j["lights"] = {{{"type", "directional"}, {"direction", {0.3, -0.4, -1}}, {"irradiance", 1}}};
+  j["camera"] = {{"position", {0.3, 0.6, 4}}, {"target", {0, 0, 0}}, {"fov_deg", 40}};
+  j["image"] = {{"width", 24}, {"height", 24}};
+  j["voxels"] = 8;
+  Scene box = parse_scene(j, ".");
+  const Settings s = {{"samples", 12000}, {"directions", 32}};
+  RenderResult r = pipeline().render(box, {Terms::Single, s, nullptr});
+  const SingleBake& bake = *pipeline().current();
+  const double voxel = voxelize(box, {.resolution = box.voxels}).voxel;
+  EXPECT_GE(*std::min_element(bake.sigma.begin(), bake.sigma.end()),
+            float(kMinSigmaVoxels * voxel * (1 - 1e-6)));
+  Expected ref = reference_single(box);
+  EXPECT_LT(relative_rmse(r.image, ref.image, ref.mask), 0.05);
 }
 
 }  // namespace
