@@ -142,6 +142,11 @@ class SinglePipeline : public Pipeline {
   // The stages of a frame with settings `s` for the asset whose fingerprint is `fp`.
   Plan make_plan(const Scene& scene, Terms terms, const SingleSettings& s,
                  const std::string& fp) const;
+  // What a frame's plan adds once the eye's place (`inside`: KeptMesh::eye_inside) and the
+  // phase's evaluation (`per_ray`: phase_per_ray with exact_tr) are known
+  // (pipelines/single/single_plan.cpp, with make_plan).
+  static void note_frame(Plan& plan, const Scene& scene, const SingleSettings& s, bool inside,
+                         bool per_ray);
   BakeResult bake(const Scene& scene, const SingleSettings& s, const std::string& fp,
                   const BakeProgress& progress);
   void upload();

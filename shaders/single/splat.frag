@@ -195,6 +195,7 @@ void main() {
   // The medium along the ray: from outside [1st, 2nd] and [3rd, 4th surface]; from an eye inside
   // the object [eye, 1st] and [2nd, 3rd]; an interval with no surface to end it stays open.
   float lo = max(x, eye_inside != 0 ? 0.0 : ta), hi = y, span = 0.0;
+  float lo2 = OPEN, hi2 = -OPEN;  // the second interval (none)
   float log_amp = log_scale - 0.5 * q;
   if (clip_back != 0) {
     float tb = texelFetch(back, px, 0).r;
@@ -202,20 +203,19 @@ void main() {
     if (eye_inside != 0) {
       hi = min(hi, ta);
       if (tb > ta) {
-        float hi2 = t3 > tb ? min(y, t3) : y;
-        float lo2 = max(x, tb);
-        if (hi2 > lo2) span += kept_span(lo2, hi2, keep0, keep1, tc, k, log_amp);
+        lo2 = max(x, tb);
+        hi2 = t3 > tb ? min(y, t3) : y;
       }
     } else {
       if (tb > ta) hi = min(hi, tb);
       if (t3 > tb && tb > ta) {
         float t4 = texelFetch(fourth, px, 0).r;
-        float hi2 = t4 > t3 ? min(y, t4) : y;
-        float lo2 = max(x, t3);
-        if (hi2 > lo2) span += kept_span(lo2, hi2, keep0, keep1, tc, k, log_amp);
+        lo2 = max(x, t3);
+        hi2 = t4 > t3 ? min(y, t4) : y;
       }
     }
   }
+  if (hi2 > lo2) span += kept_span(lo2, hi2, keep0, keep1, tc, k, log_amp);
   if (hi > lo) span += kept_span(lo, hi, keep0, keep1, tc, k, log_amp);
   if (span <= 0.0) discard;
   float integral = 0.88622693 / k * span;
