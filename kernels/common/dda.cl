@@ -109,19 +109,59 @@ float optical_depth(const Grid* g, __global const float* sigma_t, int channel, f
   return tau;
 }
 
+// A traversal of the grid's voxels along o + t d over [t0, t1]; false if that misses the grid.
+bool dda_over(const Grid* g, float3 o, float3 d, float t0, float t1, Dda* s) {
+  float g0, g1;
+  if (!grid_interval(g, o, d, &g0, &g1)) return false;
+  g0 = fmax(g0, t0);
+  g1 = fmin(g1, t1);
+  if (g1 <= g0) return false;
+  dda_init(s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), g0, g1);
+  return true;
+}
+
 // The three channels' optical depths along one traversal: per channel the same sums, in the same
 // order, as optical_depth (a third of its traversals where all three are needed).
 float3 optical_depth3(const Grid* g, __global const float* sigma_t, float3 o, float3 d, float t0, float t1) {
-  float g0, g1;
-  if (!grid_interval(g, o, d, &g0, &g1)) return (float3)(0.0f);
-  g0 = fmax(g0, t0);
-  g1 = fmin(g1, t1);
-  if (g1 <= g0) return (float3)(0.0f);
   Dda s;
-  dda_init(&s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), g0, g1);
+  if (!dda_over(g, o, d, t0, t1, &s)) return (float3)(0.0f);
   float3 tau = (float3)(0.0f);
   float a, b;
   int3 c;
   while (dda_next(&s, &a, &b, &c)) tau += vload3(voxel_index(g, c.x, c.y, c.z), sigma_t) * (b - a);
+  return tau;
+}
+
+// The part of the segment [a, b] of o + t d on the side n . (x - c) <= w of a voxel's plane
+// (n, w; zeros: the whole segment), c the voxel's centre.
+float inside_length(float4 plane, float3 c, float3 o, float3 d, float a, float b) {
+  float nd = dot(plane.xyz, d);
+  float f = dot(plane.xyz, o - c) - plane.w;  // n . (x - c) - w at t = 0
+  if (nd > 0.0f) b = fmin(b, -f / nd);
+  else if (nd < 0.0f) a = fmax(a, -f / nd);
+  else if (f > 0.0f) return 0.0f;
+  return fmax(b - a, 0.0f);
+}
+
+// optical_depth3 where a voxel's medium may end at a plane (`bound`, 4 floats a voxel: see
+// inside_length; pipelines/common/boundary_planes.hpp): each voxel's coefficient times the length
+// of the segment on the plane's inside.
+float3 optical_depth3_bounded(const Grid* g, __global const float* sigma_t, __global const float* bound,
+                              float3 o, float3 d, float t0, float t1) {
+  Dda s;
+  if (!dda_over(g, o, d, t0, t1, &s)) return (float3)(0.0f);
+  float3 tau = (float3)(0.0f);
+  float a, b;
+  int3 c;
+  while (dda_next(&s, &a, &b, &c)) {
+    int v = voxel_index(g, c.x, c.y, c.z);
+    float4 plane = vload4(v, bound);
+    float len = b - a;
+    if (plane.x != 0.0f || plane.y != 0.0f || plane.z != 0.0f) {
+      float3 centre = g->origin + g->voxel * (convert_float3(c) + 0.5f);
+      len = inside_length(plane, centre, o, d, a, b);
+    }
+    tau += vload3(v, sigma_t) * len;
+  }
   return tau;
 }

@@ -19,46 +19,64 @@
 #define INVISIBLE_DEPTH 40.0f
 
 // Optical depth of the channel mean from o towards d over [0, t1].
-float mean_depth(const Grid* g, __global const float* sigma_t, float3 o, float3 d, float t1) {
-  float3 tau = optical_depth3(g, sigma_t, o, d, 0.0f, t1);
+float mean_depth(const Grid* g, __global const float* sigma_t, __global const float* bound, float3 o, float3 d,
+                 float t1) {
+  float3 tau = optical_depth3_bounded(g, sigma_t, bound, o, d, 0.0f, t1);
   return (tau.x + tau.y + tau.z) / 3.0f;
 }
 
-bool in_medium(const Grid* g, __global const float* sigma_t, float3 p) {
+// Inside a voxel with extinction, on its plane's inside (bound: boundary_planes.hpp).
+bool in_medium(const Grid* g, __global const float* sigma_t, __global const float* bound, float3 p) {
   int3 c = voxel_of(g, p);
-  return voxel_sigma(g, sigma_t, c, 0) + voxel_sigma(g, sigma_t, c, 1) + voxel_sigma(g, sigma_t, c, 2) > 0.0f;
+  if (!(voxel_sigma(g, sigma_t, c, 0) + voxel_sigma(g, sigma_t, c, 1) + voxel_sigma(g, sigma_t, c, 2) > 0.0f))
+    return false;
+  float4 plane = vload4(voxel_index(g, c.x, c.y, c.z), bound);
+  float3 centre = g->origin + g->voxel * (convert_float3(c) + 0.5f);
+  return dot(plane.xyz, p - centre) <= plane.w;
 }
 
 // Mean optical depth from p to the target: a point (directional 0) or along -dir to infinity.
-float depth_to(const Grid* g, __global const float* sigma_t, float3 p, float3 target, int directional) {
-  if (directional) return mean_depth(g, sigma_t, p, target, INFINITY);
+float depth_to(const Grid* g, __global const float* sigma_t, __global const float* bound, float3 p, float3 target,
+               int directional) {
+  if (directional) return mean_depth(g, sigma_t, bound, p, target, INFINITY);
   float3 d = target - p;
   float len = length(d);
-  return len > 0.0f ? mean_depth(g, sigma_t, p, d / len, len) : 0.0f;
+  return len > 0.0f ? mean_depth(g, sigma_t, bound, p, d / len, len) : 0.0f;
 }
 
 // Gradient of depth_to at a: per axis, differences over +-h to points inside the medium only
 // (outside the optical depth does not continue the inside's), the smaller of the two slopes when
 // both agree in sign and zero when they disagree (minmod: a shadow edge or a layer boundary
 // does not make a steep slope out of one side). *curv: the second differences where both sides
-// are inside (else zero).
-float3 depth_gradient(const Grid* g, __global const float* sigma_t, float3 a, float tau0, float3 target,
+// are inside (else zero). Where neither point at +-h is inside (a medium thinner than 2 h along
+// the axis: a one-voxel slab under a Gaussian wider than a voxel) the step halves, up to four
+// times: across such a slab the depth changes by its full optical thickness, which a zero slope
+// spread over the whole Gaussian (6.7x the single term's bound at sigma_t x voxel 1000).
+float3 depth_gradient(const Grid* g, __global const float* sigma_t, __global const float* bound, float3 a,
+                      float tau0, float3 target,
                       int directional, float h, float4 plane, float3* curv) {
   float out[3], c2[3];
   for (int k = 0; k < 3; ++k) {
-    float3 e = (float3)(k == 0 ? h : 0.0f, k == 1 ? h : 0.0f, k == 2 ? h : 0.0f);
-    // A piece split at a jump (plane: its side is n . x <= d) differences on its side only.
-    bool ip = in_medium(g, sigma_t, a + e) && dot(plane.xyz, a + e) <= plane.w;
-    bool im = in_medium(g, sigma_t, a - e) && dot(plane.xyz, a - e) <= plane.w;
-    float fwd = ip ? (depth_to(g, sigma_t, a + e, target, directional) - tau0) / h : 0.0f;
-    float bwd = im ? (tau0 - depth_to(g, sigma_t, a - e, target, directional)) / h : 0.0f;
+    float hk = h;
+    float3 axis = (float3)(k == 0 ? 1.0f : 0.0f, k == 1 ? 1.0f : 0.0f, k == 2 ? 1.0f : 0.0f);
+    bool ip = false, im = false;
+    for (int tries = 0; tries < 5 && !ip && !im; ++tries) {
+      if (tries > 0) hk *= 0.5f;
+      float3 e = axis * hk;
+      // A piece split at a jump (plane: its side is n . x <= d) differences on its side only.
+      ip = in_medium(g, sigma_t, bound, a + e) && dot(plane.xyz, a + e) <= plane.w;
+      im = in_medium(g, sigma_t, bound, a - e) && dot(plane.xyz, a - e) <= plane.w;
+    }
+    float3 e = axis * hk;
+    float fwd = ip ? (depth_to(g, sigma_t, bound, a + e, target, directional) - tau0) / hk : 0.0f;
+    float bwd = im ? (tau0 - depth_to(g, sigma_t, bound, a - e, target, directional)) / hk : 0.0f;
     float s = 0.0f;
     c2[k] = 0.0f;
     if (ip && im) {
       s = fwd * bwd > 0.0f ? (fabs(fwd) < fabs(bwd) ? fwd : bwd) : 0.0f;
       // Where the slopes disagree in sign (a thin feature, an edge of the grid's medium) the
       // parabola would be a wrong peak or trough: no curvature there.
-      if (fwd * bwd > 0.0f) c2[k] = (fwd - bwd) / h;
+      if (fwd * bwd > 0.0f) c2[k] = (fwd - bwd) / hk;
     } else if (ip) {
       s = fwd;
     } else if (im) {
@@ -73,7 +91,7 @@ float3 depth_gradient(const Grid* g, __global const float* sigma_t, float3 a, fl
 // out[3 i + c]: transmittance of channel c from sample i to light `light`; with `gradient`,
 // grad[3 i ..]: the gradient of its channel-mean optical depth.
 __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, int nz,
-                                  __global const float* sigma_t, __global const float* at,
+                                  __global const float* sigma_t, __global const float* bound, __global const float* at,
                                   __global const float* sigma, __global const float* planes, int count,
                                   __global const float* lights, int light,
                                   int gradient, __global float* out, __global float* grad) {
@@ -85,7 +103,7 @@ __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, in
   float3 wl;
   float dist;
   light_irradiance(L, b, 0, &wl, &dist);  // the direction and distance of every channel
-  float3 taus = optical_depth3(&grid, sigma_t, b, wl, 0.0f, dist);
+  float3 taus = optical_depth3_bounded(&grid, sigma_t, bound, b, wl, 0.0f, dist);
   float tau_ch[3] = {taus.x, taus.y, taus.z};
   float mean = 0.0f;
   for (int ch = 0; ch < 3; ++ch) {
@@ -95,7 +113,7 @@ __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, in
   if (!gradient) return;
   int directional = L.type == 1;
   float3 curv;
-  float3 g = depth_gradient(&grid, sigma_t, b, mean, directional ? -L.direction : L.position, directional, sigma[i],
+  float3 g = depth_gradient(&grid, sigma_t, bound, b, mean, directional ? -L.direction : L.position, directional, sigma[i],
                             vload4(i, planes), &curv);
   vstore3(g, 2 * i, grad);
   vstore3(curv, 2 * i + 1, grad);
@@ -114,6 +132,7 @@ float splat_reach(float3 axis, float s, float3 offset) {
 }
 
 __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __global const float* sigma_t,
+                          __global const float* bound,
                           __global const float* at, __global const float* position, __global const float* sigma,
                           __global const float* weight, __global const float* sigma_s, __global const float* planes,
                           int count,
@@ -133,7 +152,7 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   float3 light_g = (float3)(0.0f), light_c = (float3)(0.0f);
   float light_w = 0.0f;
   float tau_min = INFINITY;  // the least optical depth (eye plus a light) of any channel that adds
-  float3 view_taus = optical_depth3(&grid, sigma_t, b, v, 0.0f, de);
+  float3 view_taus = optical_depth3_bounded(&grid, sigma_t, bound, b, v, 0.0f, de);
   float view_tau[3] = {view_taus.x, view_taus.y, view_taus.z};
   for (int ch = 0; ch < 3; ++ch) {
     float tau = view_tau[ch];
@@ -169,13 +188,14 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   if (!visible) res[0] = res[1] = res[2] = 0.0f;
   float3 offset = (float3)(0.0f);
   float log_scale = 0.0f;
+  float depth_p = 0.0f;  // the model's optical depth at p less at the anchor: g . (p - a) + ...
   float4 depth_cut = (float4)(0.0f);  // zeros: no cut
   float4 quad_slope = (float4)(0.0f), quad_curv = (float4)(0.0f);  // zeros: no cut
   float s = sigma[i] * sigma_scale;  // sample_fraction widens the Gaussians of the prefix drawn
   float3 axis = (float3)(s);
   if (gradient && visible) {
     float3 curv;
-    float3 g = depth_gradient(&grid, sigma_t, b, view_mean, eye, 0, s, vload4(i, planes), &curv);
+    float3 g = depth_gradient(&grid, sigma_t, bound, b, view_mean, eye, 0, s, vload4(i, planes), &curv);
     if (light_w > 0.0f) {
       g += light_g / light_w;
       curv += light_c / light_w;
@@ -196,7 +216,8 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
     offset = -gp / prec;
     // The scale's logarithm: in a dense medium it is |g|^2 s^2 / 2, far past float's range, and
     // the moved Gaussian's mass in the medium as small; the splat multiplies them in log space.
-    log_scale = -dot(g, d) - 0.5f * dot(curv * d, d) + 0.5f * dot(gp * gp, 1.0f / prec);
+    depth_p = dot(g, d) + 0.5f * dot(curv * d, d);
+    log_scale = -depth_p + 0.5f * dot(gp * gp, 1.0f / prec);
     axis = rsqrt(prec);
     // The linear model's optical depth, tau_min + g . (x - a), is negative beyond a plane, where
     // its transmittance would exceed one (a wrong slope, a layer it does not fit): the splat
@@ -206,19 +227,17 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
     // The model with its curvature, tau_min + g . (x - a) + 1/2 sum_k curv_k (x_k - a_k)^2, goes
     // negative on the near side of that plane too where the curvature is concave (it widens the
     // Gaussian, and its depth falls away from the centre): the splat integrates only where this
-    // quadratic is >= 0, its zero set along each view ray. Kept about the moved centre c (the
-    // splat measures from it): depth tau_c, slope g_c there. Where no axis is concave the
-    // quadratic lies above the linear model, and the linear cut alone is the same; where it stays
-    // >= 0 over the ball the splat covers (radius r about c, splat_reach: tau_c - |g_c| r
-    // + 1/2 sum_k min(curv_k, 0) r^2 >= 0), it cuts nothing. Neither writes a second cut.
+    // quadratic is >= 0, its zero set along each view ray. Kept about the sample's centre p (the
+    // splat measures from it): depth tau_min + depth_p, slope gp there. Where no axis is concave
+    // the quadratic lies above the linear model, and the linear cut alone is the same; where it
+    // stays >= 0 over the ball the splat covers (within r of p: the ball's radius about the moved
+    // centre, splat_reach, plus the move), it cuts nothing. Neither writes a second cut.
     float3 concave = fmin(curv, 0.0f);
     if (isfinite(tau_min) && (concave.x < 0.0f || concave.y < 0.0f || concave.z < 0.0f)) {
-      float3 u = d + offset;
-      float3 gc = g + curv * u;
-      float tau_c = tau_min + dot(g, u) + 0.5f * dot(curv * u, u);
-      float r = splat_reach(axis, s, offset);
-      if (tau_c - length(gc) * r + 0.5f * (concave.x + concave.y + concave.z) * r * r < 0.0f) {
-        quad_slope = (float4)(gc, tau_c);
+      float tau_p = tau_min + depth_p;
+      float r = splat_reach(axis, s, offset) + length(offset);
+      if (tau_p - length(gp) * r + 0.5f * (concave.x + concave.y + concave.z) * r * r < 0.0f) {
+        quad_slope = (float4)(gp, tau_p);
         quad_curv = (float4)(curv, 0.0f);
       }
     }
@@ -228,7 +247,9 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
   cut[3 * i + 2] = quad_curv;
   out[i] = (float4)(res[0], res[1], res[2], log_scale);
   shift[i] = (float4)(offset, splat_reach(axis, s, offset));
-  // The Gaussian's standard deviation per axis; w: its amplitude relative to the isotropic one's
-  // (already in the factor: 1).
-  axes[i] = (float4)(axis, 1.0f);
+  // The Gaussian's standard deviation per axis; w: depth_p. The splat integrates the product in
+  // the frame of the sample's own centre p, exp(-|x - p|^2_prec / 2 - gp . (x - p) - depth_p),
+  // whose terms stay small where the moved Gaussian's (its distance from the eye's ray squared,
+  // and log_scale) reach 1e6 in a dense medium and cancel to nothing in float.
+  axes[i] = (float4)(axis, depth_p);
 }

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "gpu/cl_context.hpp"
+#include "pipelines/common/boundary_planes.hpp"
 #include "scene/voxelizer.hpp"
 
 namespace scatter {
@@ -16,5 +17,12 @@ struct BrickGrid {
 
 // Per-brick extinction majorants for delta tracking; empty bricks get 0 and can be skipped.
 BrickGrid brick_majorants(gpu::ClContext& cl, const VoxelGrid& grid, int brick = 8);
+
+// The RGB optical depths of rays (7 floats each: origin, unit direction, length) through the
+// mesh-bounded medium `bounded` of `grid` (kernels/common/depth_query.cl, 3 floats a ray): what
+// single's exact transmittance sums.
+std::vector<float> bounded_optical_depths(gpu::ClContext& cl, const VoxelGrid& grid,
+                                          const BoundedExtinction& bounded,
+                                          const std::vector<float>& rays);
 
 }  // namespace scatter

@@ -81,10 +81,14 @@ CostEstimate SinglePipeline::estimate(const Scene& scene, const RenderRequest& r
   const double pieces = 2 * samples, lights = std::max<size_t>(scene.lights.size(), 1);
   frame.host("scene.voxels", n * kGridBytes, grid + " x 29 B (the grid kept for exact_tr)");
   frame.host("settings.samples", 2 * samples * (15 + 3 * nc) * 4, "the product");
-  frame.device("scene.voxels", s.exact_tr ? n * 12 : 0, grid + " x 12 B (sigma_t)");
-  frame.device("settings.samples",
-               pieces * (108 + 12 * nc + (s.exact_tr ? 108 + 2 * 36 * lights : 0)),
-               std::to_string(p.samples) + " samples' buffers");
+  // sigma_t and the (zero) planes; with mesh_bound the bounded medium's as well.
+  const double voxel_bytes = s.exact_tr ? (s.mesh_bound ? 56 : 28) : 0;
+  frame.device("scene.voxels", n * voxel_bytes,
+               grid + " x " + std::to_string(int(voxel_bytes)) + " B (sigma_t, planes)");
+  frame.device(
+      "settings.samples",
+      pieces * (108 + 12 * nc + (s.exact_tr ? 108 + 2 * 36 * lights + (s.mesh_bound ? 12 : 0) : 0)),
+      std::to_string(p.samples) + " samples' buffers");
   frame.device(
       "scene.image.width", px * 5 * 20,
       std::to_string(scene.width) + "x" + std::to_string(scene.height) + " px x 5 targets x 20 B");

@@ -64,7 +64,11 @@ const SettingsTable<SingleSettings>& single_settings() {
                "transmittance at most one)"),
        flag("tr_hessian", &S::tr_hessian, frame(),
             "with tr_gradient: the optical depth's curvature per axis stretches or narrows each "
-            "Gaussian")},
+            "Gaussian"),
+       flag("mesh_bound", &S::mesh_bound, frame(),
+            "with exact_tr: optical depths through the mesh's medium, per unit medium and cut by a "
+            "plane in each boundary voxel, not the voxels' means (dense media; "
+            "docs/pipelines/single.md)")},
       [](const SingleSettings& s) {
         s.bake.check();
         if (s.splat_scale > 0 && s.splat_scale < 0.16)

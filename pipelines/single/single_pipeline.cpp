@@ -167,7 +167,7 @@ void SinglePipeline::reset_moves() {
   glClearNamedBufferData(shifts_.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
   glClearNamedBufferData(cuts_.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
   std::vector<float> axes(size_t(std::max(b.count, 1)) * 4, 0.f);
-  for (int i = 0; i < b.count; ++i) std::fill_n(&axes[4 * size_t(i)], 4, b.sigma[i]);
+  for (int i = 0; i < b.count; ++i) std::fill_n(&axes[4 * size_t(i)], 3, b.sigma[i]);  // w: 0
   glNamedBufferSubData(axes_.get(), 0, static_cast<GLsizeiptr>(axes.size() * sizeof(float)),
                        axes.data());
   current_.moved = false;
@@ -259,7 +259,7 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
 
   const GLuint shade = shade_program_.get();
   if (s.exact_tr) {
-    shade_exact(scene, drawn, s.tr_gradient, s.tr_hessian, s.tr_gradient_max);
+    shade_exact(scene, drawn, s.tr_gradient, s.tr_hessian, s.tr_gradient_max, s.mesh_bound);
     current_.moved = true;
   } else if (current_.moved) {
     reset_moves();  // the SH path moves and stretches nothing

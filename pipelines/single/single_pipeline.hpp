@@ -93,6 +93,7 @@ struct SingleSettings {
   bool tr_gradient = true;
   double tr_gradient_max = 1000.0;
   bool tr_hessian = true;
+  bool mesh_bound = false;  // exact_tr's optical depths bounded by a plane per boundary voxel
   static SingleSettings read(const Settings& settings);
 };
 // The settings table (pipelines/single/single_info.cpp).
@@ -131,6 +132,7 @@ class SinglePipeline : public Pipeline {
     std::shared_ptr<const VoxelGrid> grid;        // the medium it was baked from (exact_tr)
     bool uploaded = false;
     bool cl_uploaded = false;
+    bool cl_bounded = false;  // the mesh-bounded medium and anchors are uploaded (mesh_bound)
     // exact_tr: transmittance to each light and (tr_gradient) its optical depth's gradient, by
     // the light's place and whether the gradient was computed
     std::map<std::string, std::pair<cl::Buffer, cl::Buffer>> light_tr;
@@ -155,9 +157,10 @@ class SinglePipeline : public Pipeline {
   void reset_moves();
   // exact_tr: the per-sample factors by kernels/single/shade.cl, written into colors_.
   // With `gradient`, also each Gaussian's offset into shifts_ (kernels/single/shade.cl). Only the
-  // `drawn` samples, their sigma scaled.
+  // `drawn` samples, their sigma scaled. `mesh_bound`: through the mesh-bounded medium
+  // (pipelines/common/boundary_planes.hpp).
   void shade_exact(const Scene& scene, const DrawnSamples& drawn, bool gradient, bool hessian,
-                   double max_gs);
+                   double max_gs, bool mesh_bound);
   // splat_scale: the image from `splat` (one pixel in stride x stride) and the image-size
   // distance textures front, back, third, fourth (pipelines/single/single_upsample.cpp); `inside`:
   // the eye is inside the object (KeptMesh::eye_inside).
@@ -175,8 +178,9 @@ class SinglePipeline : public Pipeline {
   gpu::GlObject splat_quad_program_;
   gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_, planes_,
       cuts_, light_factors_;
-  cl::Buffer cl_sigma_t_, cl_at_, cl_position_, cl_sigma_, cl_weight_, cl_coarse_weight_,
-      cl_sigma_s_, cl_plane_, cl_out_, cl_shift_, cl_axes_, cl_cut_, cl_light_factor_;
+  cl::Buffer cl_sigma_t_, cl_no_bound_, cl_bounded_sigma_t_, cl_bound_, cl_bounded_at_, cl_at_,
+      cl_position_, cl_sigma_, cl_weight_, cl_coarse_weight_, cl_sigma_s_, cl_plane_, cl_out_,
+      cl_shift_, cl_axes_, cl_cut_, cl_light_factor_;
   size_t light_factor_floats_ = 0;  // the size of light_factors_ and cl_light_factor_
 };
 

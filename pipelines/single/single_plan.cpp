@@ -42,11 +42,14 @@ Plan SinglePipeline::make_plan(const Scene& scene, Terms terms, const SingleSett
                       s.clip_back
                           ? "four surfaces: the medium along each ray is [1st, 2nd] and [3rd, 4th]"
                           : "first surface (the paper's clipping)"});
-  p.stages.push_back({"shade", true,
-                      std::to_string(scene.lights.size()) +
-                          " lights evaluated once per sample, not per fragment" +
-                          (s.exact_tr ? ": exact optical depths through the voxels (exact_tr)"
-                                      : ": transmittance from the samples' SH")});
+  p.stages.push_back(
+      {"shade", true,
+       std::to_string(scene.lights.size()) + " lights evaluated once per sample, not per fragment" +
+           (s.exact_tr ? std::string(": exact optical depths through the voxels (exact_tr)") +
+                             (s.mesh_bound ? ", the medium bounded by a plane per "
+                                             "boundary voxel (mesh_bound)"
+                                           : "")
+                       : std::string(": transmittance from the samples' SH"))});
   std::string moved;
   if (s.exact_tr && s.tr_gradient)
     moved = s.tr_hessian ? ", moved and stretched by the optical depth's gradient and curvature"

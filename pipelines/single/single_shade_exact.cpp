@@ -3,6 +3,7 @@
 // each light's transmittance (and gradient) is kept while the light stays put.
 #include <map>
 
+#include "pipelines/common/boundary_planes.hpp"
 #include "pipelines/common/cl_library.hpp"
 #include "pipelines/common/cl_scene.hpp"
 #include "pipelines/single/single_pipeline.hpp"
@@ -10,14 +11,16 @@
 namespace scatter {
 
 void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, bool gradient,
-                                 bool hessian, double max_gs) {
+                                 bool hessian, double max_gs, bool mesh_bound) {
   const SingleBake& b = *current_.bake;
   const VoxelGrid& g = *current_.grid;
   gpu::ClContext& cl = gpu_.cl();
   if (!current_.cl_uploaded) {
+    // The voxels' mean extinction, no planes, the baked anchors (mesh_bound 0).
     std::vector<float> st(g.sigma_s.size());
     for (size_t i = 0; i < st.size(); ++i) st[i] = g.sigma_s[i] + g.sigma_a[i];
     cl_sigma_t_ = scatter::upload(cl, st);
+    cl_no_bound_ = scatter::upload(cl, std::vector<float>(4 * std::max<size_t>(g.count(), 1), 0.f));
     cl_at_ = scatter::upload(cl, b.depth_at);
     cl_position_ = scatter::upload(cl, b.position);
     cl_sigma_ = scatter::upload(cl, b.sigma);
@@ -39,6 +42,27 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
                          size_t(std::max(b.count, 1)) * 12 * sizeof(float));
     current_.cl_uploaded = true;
   }
+  if (mesh_bound && !current_.cl_bounded) {
+    // The medium the splat sees: bounded by the mesh, sigma_s per unit medium (the bake's), so
+    // that the optical depths are of the same medium (pipelines/common/boundary_planes.hpp).
+    const BoundedExtinction bounded = bounded_extinction(g);
+    cl_bounded_sigma_t_ = scatter::upload(cl, bounded.sigma_t);
+    cl_bound_ = scatter::upload(cl, bounded.plane);
+    // Anchors in a boundary voxel's empty part measure from the mesh's side of its plane.
+    std::vector<float> at(b.depth_at.size());
+    for (size_t i = 0; 3 * i < at.size(); ++i) {
+      const Vec3 p = inside_bound(
+          g, bounded, Vec3{b.depth_at[3 * i], b.depth_at[3 * i + 1], b.depth_at[3 * i + 2]});
+      at[3 * i] = float(p.x);
+      at[3 * i + 1] = float(p.y);
+      at[3 * i + 2] = float(p.z);
+    }
+    cl_bounded_at_ = scatter::upload(cl, at);
+    current_.cl_bounded = true;
+  }
+  const cl::Buffer& sigma_t = mesh_bound ? cl_bounded_sigma_t_ : cl_sigma_t_;
+  const cl::Buffer& bound = mesh_bound ? cl_bound_ : cl_no_bound_;
+  const cl::Buffer& anchors = mesh_bound ? cl_bounded_at_ : cl_at_;
   const std::vector<std::string> program = with_cl_library({"kernels/single/shade.cl"});
   cl::Buffer lights = scatter::upload(cl, pack_lights(scene.lights));
   cl_float3 origin{{float(g.origin.x), float(g.origin.y), float(g.origin.z)}};
@@ -54,7 +78,8 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
     const Light& light = scene.lights[l];
     const Vec3& where = light.type == Light::Type::Directional ? light.direction : light.position;
     std::string key = std::to_string(int(light.type)) + ":" + exact_number(where.x) + "," +
-                      exact_number(where.y) + "," + exact_number(where.z) + (gradient ? ":g" : "");
+                      exact_number(where.y) + "," + exact_number(where.z) +
+                      (mesh_bound ? ":m" : "") + (gradient ? ":g" : "");
     auto found = current_.light_tr.find(key);
     // A frame without the gradient can use a kept pass with it (the transmittance is the same):
     // the live view's moving frames and its still frame share the light's pass.
@@ -68,7 +93,7 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
     } else {
       tr = {cl::Buffer(cl.context(), CL_MEM_READ_WRITE, block),
             cl::Buffer(cl.context(), CL_MEM_READ_WRITE, 2 * block)};
-      gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_,
+      gpu::set_args(per_light, origin, float(g.voxel), g.nx, g.ny, g.nz, sigma_t, bound, anchors,
                     cl_sigma_, cl_plane_, b.count, lights, static_cast<int>(l), gradient ? 1 : 0,
                     tr.first, tr.second);
       cl.queue().enqueueNDRangeKernel(per_light, cl::NullRange,
@@ -96,7 +121,7 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
   cl::Kernel k(cl.program(program), "shade_exact");
   const Vec3& e = scene.camera.position;
   cl_float3 eye{{float(e.x), float(e.y), float(e.z)}};
-  gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, cl_sigma_t_, cl_at_, cl_position_,
+  gpu::set_args(k, origin, float(g.voxel), g.nx, g.ny, g.nz, sigma_t, bound, anchors, cl_position_,
                 cl_sigma_, drawn.coarse ? cl_coarse_weight_ : cl_weight_, cl_sigma_s_, cl_plane_,
                 b.count, lights, static_cast<int>(scene.lights.size()), all, all_grad,
                 gradient ? 1 : 0, hessian ? 1 : 0, float(max_gs), float(scene.medium.g), eye,

@@ -6,14 +6,15 @@
 // behind the second surface adds nothing to the gap and one behind a thin part (an ear in
 // front of the head) still adds its share. From an eye inside the object: [eye, first] and
 // [second, third] (clip_back 0: everything ahead of the eye).
-flat in vec3 center;
+flat in vec3 center;  // the ball's (the Gaussian moved by tr_gradient's model)
+flat in vec3 own_center, own_slope;  // the sample's own centre p and the model's slope there
+flat in float own_depth;  // the model's depth at p less at the anchor (the factor's point)
 flat in vec3 gauss_sigma;  // per axis
 flat in float cutoff;
 flat in vec3 factor;
-flat in float log_scale;  // the factor's scale is exp(log_scale)
 flat in vec4 clip_plane;  // the piece's side: n . x <= d (zeros: everywhere)
 flat in vec4 depth_cut;   // where the linear transmittance model's optical depth is >= 0: likewise
-flat in vec4 quad_slope;  // the quadratic model's about the centre, (g, tau_c) ...
+flat in vec4 quad_slope;  // the quadratic model's about own_center, (g, tau_p) ...
 flat in vec4 quad_curv;   // ... and (curv, 0): integrated only where it is >= 0 (zeros: no cut,
                           // written only where an axis is concave)
 flat in int sample_index;
@@ -66,15 +67,28 @@ float erfcx(float x) {
   return 0.56418958 / f;
 }
 
-// exp(log_amp) (erf(w) - erf(u)), u <= w, without leaving float's range: where both ends lie on
-// one side of the peak, as erfc differences with their exp(-x^2) folded into the exponent (a
-// dense medium moves the Gaussian far outside, scaled by far more than float holds).
-float erf_span(float u, float w, float log_amp) {
-  // The common case (scales the paper's model gives, exp(20) ~ 5e8): erf differences directly.
-  if (log_amp < 20.0) return exp(log_amp) * (erf_approx(w) - erf_approx(u));
-  if (u >= 0.0) return exp(log_amp - u * u) * (erfcx(u) - exp((u - w) * (u + w)) * erfcx(w));
-  if (w <= 0.0) return exp(log_amp - w * w) * (erfcx(-w) - exp((w - u) * (w + u)) * erfcx(-u));
-  return exp(log_amp) * (erf_approx(w) - erf_approx(u));
+// Along the ray eye + t d, with s = t - tp (tp: the point nearest own_center), the log of the
+// Gaussian times the model's transmittance is E(s) = -(ea s^2 + eb s + ec), a parabola whose
+// vertex is where the moved Gaussian peaks. Set per fragment by main().
+float ea, eb, ec, ek, es;  // ek = sqrt(ea), es = the vertex
+
+float expo(float s) { return -((ea * s + eb) * s + ec); }
+
+// The integral of exp(E) over [s1, s2] times 2 ek / sqrt(pi), without leaving float's range or
+// its precision. With z = ek (s - es) it is exp(E(es)) (erf(z2) - erf(z1)); where both ends lie on
+// one side of the vertex, erfc differences whose exp(-z^2) is exp(E) at the ends, evaluated
+// directly. A dense medium moves the Gaussian far outside (a vertex 500 units away, E(es) near
+// 8e5): its tail on the segment is then a difference of two erf within 1e-7 of one (A&S's error,
+// and float's spacing there) times that scale, and E(es) itself is a difference of two such
+// numbers, which float does not hold (the stress suite's mixed/1621, a third of a pixel's single
+// term; mixed/1775, 4x its bound).
+float erf_span(float s1, float s2) {
+  float z1 = ek * (s1 - es), z2 = ek * (s2 - es);
+  // The common case (the vertex on the segment, or a peak of at most one): erf differences.
+  float peak = ea * es * es - ec;  // E(es), to within float where it is far
+  if (peak <= 0.0 || (z1 < 0.0 && z2 > 0.0)) return exp(peak) * (erf_approx(z2) - erf_approx(z1));
+  if (z1 >= 0.0) return exp(expo(s1)) * erfcx(z1) - exp(expo(s2)) * erfcx(z2);
+  return exp(expo(s2)) * erfcx(-z2) - exp(expo(s1)) * erfcx(-z1);
 }
 
 // Henyey-Greenstein at cosine c (as shaders/single/shade.comp).
@@ -106,7 +120,7 @@ const float OPEN = 1e30;  // an interval's open end
 const vec2 EVERYWHERE = vec2(-OPEN, OPEN), NOWHERE = vec2(OPEN, -OPEN);
 
 // Where along the ray the quadratic model's optical depth, tau_c + g . e + 1/2 sum_k curv_k e_k^2
-// with e = o + s d the offset from the centre (s = t - tm), is >= 0: up to two intervals of s,
+// with e = o + s d the offset from own_center (s = t - tp), is >= 0: up to two intervals of s,
 // keep0 and keep1 (empty: y <= x). In s it is a s^2 + b s + c; over a chord
 // of half length hc where the s^2 term is negligible, a half-line.
 void quad_keep(vec3 d, vec3 o, float hc, out vec2 keep0, out vec2 keep1) {
@@ -140,14 +154,14 @@ void quad_keep(vec3 d, vec3 o, float hc, out vec2 keep0, out vec2 keep1) {
   }
 }
 
-// The span of [u, w] inside the quadratic model's keep intervals (in t: s + tm).
-float kept_span(float u, float w, vec2 keep0, vec2 keep1, float tc, float k, float log_amp) {
+// The span of [u, w] (in t) inside the quadratic model's keep intervals (in t: s + tp).
+float kept_span(float u, float w, vec2 keep0, vec2 keep1, float tp) {
   float sum = 0.0;
   float x0 = max(u, keep0.x), y0 = min(w, keep0.y);
-  if (y0 > x0) sum += erf_span((x0 - tc) * k, (y0 - tc) * k, log_amp);
+  if (y0 > x0) sum += erf_span(x0 - tp, y0 - tp);
 #ifdef QUAD_CUT
   float x1 = max(u, keep1.x), y1 = min(w, keep1.y);
-  if (y1 > x1) sum += erf_span((x1 - tc) * k, (y1 - tc) * k, log_amp);
+  if (y1 > x1) sum += erf_span(x1 - tp, y1 - tp);
 #endif
   return sum;
 }
@@ -159,22 +173,24 @@ void main() {
   if (ta <= 0.0) discard;
   vec2 s = (vec2(px) + 0.5) / size * 2.0 - 1.0;
   vec3 d = normalize(forward + right * s.x + up * s.y);
-  // Along the ray x(t) = eye + t d the exponent sum_k (x_k - c_k)^2 / (2 s_k^2) is
-  // (A t^2 + 2 B t + C) / 2: a Gaussian in t centred at -B / A.
-  vec3 prec = 1.0 / (gauss_sigma * gauss_sigma);
   vec3 to = center - eye;
-  float tm = dot(to, d);  // the ball's chord is about the centre's closest point
+  float tm = dot(to, d);  // the ball's chord is about its centre's closest point
   float h2 = max(dot(to, to) - tm * tm, 0.0);
-  // Measured from that point (small numbers, whose differences keep float's precision).
-  vec3 o = eye + tm * d - center;
-  float A = dot(prec, d * d), B = dot(prec, o * d), C = dot(prec, o * o);
-  float tc = tm - B / A;
-  float q = max(C - B * B / A, 0.0);  // twice the exponent at the peak
   float r2 = cutoff * cutoff;
   if (h2 >= r2) discard;
   float half_chord = sqrt(r2 - h2);
   float x = tm - half_chord, y = tm + half_chord;
-  float k = sqrt(0.5 * A);
+  // Along the ray, from the point nearest own_center p (small numbers, whose differences keep
+  // float's precision), u(s) = o + s d = x - p: the exponent sum_k u_k^2 / (2 s_k^2) + slope . u +
+  // own_depth is ea s^2 + eb s + ec.
+  vec3 prec = 1.0 / (gauss_sigma * gauss_sigma);
+  float tp = dot(own_center - eye, d);
+  vec3 o = eye + tp * d - own_center;
+  ea = 0.5 * dot(prec, d * d);
+  eb = dot(prec, o * d) + dot(own_slope, d);
+  ec = 0.5 * dot(prec, o * o) + dot(own_slope, o) + own_depth;
+  ek = sqrt(ea);
+  es = -0.5 * eb / ea;
   // erf of the chord's ends relative to the peak, per interval of the medium.
   // A piece's plane clips the chord to its side, the depth cut to where the model holds.
   clip_chord(clip_plane, d, x, y);
@@ -188,15 +204,14 @@ void main() {
 #ifdef QUAD_CUT
   if (any(lessThan(quad_curv.xyz, vec3(0.0)))) {
     quad_keep(d, o, half_chord, keep0, keep1);
-    keep0 += tm;
-    keep1 += tm;
+    keep0 += tp;
+    keep1 += tp;
   }
 #endif
   // The medium along the ray: from outside [1st, 2nd] and [3rd, 4th surface]; from an eye inside
   // the object [eye, 1st] and [2nd, 3rd]; an interval with no surface to end it stays open.
   float lo = max(x, eye_inside != 0 ? 0.0 : ta), hi = y, span = 0.0;
   float lo2 = OPEN, hi2 = -OPEN;  // the second interval (none)
-  float log_amp = log_scale - 0.5 * q;
   if (clip_back != 0) {
     float tb = texelFetch(back, px, 0).r;
     float t3 = texelFetch(third, px, 0).r;
@@ -215,9 +230,9 @@ void main() {
       }
     }
   }
-  if (hi2 > lo2) span += kept_span(lo2, hi2, keep0, keep1, tc, k, log_amp);
-  if (hi > lo) span += kept_span(lo, hi, keep0, keep1, tc, k, log_amp);
+  if (hi2 > lo2) span += kept_span(lo2, hi2, keep0, keep1, tp);
+  if (hi > lo) span += kept_span(lo, hi, keep0, keep1, tp);
   if (span <= 0.0) discard;
-  float integral = 0.88622693 / k * span;
+  float integral = 0.88622693 / ek * span;
   radiance = vec4(ray_factor(d) * integral, 0.0);
 }

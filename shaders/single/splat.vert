@@ -7,7 +7,9 @@ layout(std430, binding = 4) readonly buffer Colors { vec4 color[]; };
 // Offset of the Gaussian's centre (exact_tr with tr_gradient: kernels/single/shade.cl) and its
 // cut-off radius if above 3 sigma, else zeros.
 layout(std430, binding = 6) readonly buffer Shifts { vec4 shift[]; };
-// Standard deviation of the Gaussian per axis (tr_gradient's curvature stretches it; else sigma).
+// Standard deviation of the Gaussian per axis (tr_gradient's curvature stretches it; else sigma);
+// w: the transmittance model's optical depth at the sample's centre less at its anchor (0 without
+// tr_gradient).
 layout(std430, binding = 7) readonly buffer Axes { vec4 axes[]; };
 
 // A piece split at an extinction jump counts only where n . x <= d (xyz n, w d; zeros: everywhere).
@@ -28,10 +30,12 @@ uniform vec2 ndc_shift;
 uniform int first;
 
 flat out vec3 center;
+flat out vec3 own_center;  // the sample's own (unmoved): the frame the fragment integrates in
+flat out vec3 own_slope;   // the model's optical depth gradient there
+flat out float own_depth;  // and its depth there less at the anchor
 flat out vec3 gauss_sigma;
 flat out float cutoff;  // radius of the ball the Gaussian is integrated over
 flat out vec3 factor;
-flat out float log_scale;  // the factor's scale, as its logarithm (tr_gradient; else 0)
 flat out vec4 clip_plane;
 flat out vec4 depth_cut;
 flat out vec4 quad_slope;
@@ -40,10 +44,12 @@ flat out int sample_index;
 
 void main() {
   uint i = uint(first + gl_InstanceID);
-  center = vec3(position[3u * i], position[3u * i + 1u], position[3u * i + 2u]) + shift[i].xyz;
+  own_center = vec3(position[3u * i], position[3u * i + 1u], position[3u * i + 2u]);
+  center = own_center + shift[i].xyz;
   gauss_sigma = axes[i].xyz;
+  own_slope = -shift[i].xyz / (gauss_sigma * gauss_sigma);  // the move is -slope sigma^2
+  own_depth = axes[i].w;
   factor = color[i].rgb;
-  log_scale = color[i].w;
   clip_plane = plane[i];
   depth_cut = cut[3u * i];
   quad_slope = cut[3u * i + 1u];

@@ -226,6 +226,19 @@ TEST_P(Stress, ExtremeScenes) {
   }
 }
 
+// `single` with `settings` renders case c's single term finite and under its physical bound.
+void expect_single_under_bound(const StressCase& c, const Settings& settings) {
+  Scene scene = parse_scene(c.scene, data_dir());
+  auto pipeline = make_pipeline("single", test::shared_gpu());
+  const RenderRequest request{Terms::Single, settings, nullptr};
+  pipeline->bake(scene, request);
+  const RenderResult r = pipeline->render(scene, request);
+  EXPECT_EQ(bad_value(r.image), "") << c.name;
+  const std::optional<Image> bound = single_bound(scene, false);
+  ASSERT_TRUE(bound) << c.name;
+  EXPECT_EQ(above_bound(r.image, *bound), "") << c.name;
+}
+
 // One-voxel shells seen from inside, several mean free paths a voxel (long mode), with samples
 // enough to resolve the shell: under `single` they stay under the bound since the splat clips to
 // the quadratic transmittance model's own zero set (before: 32x-21,000x; docs/STRESS.md), and
@@ -242,18 +255,34 @@ TEST(SingleShells, InsideUnderTheBoundWithEnoughSamples) {
     if (std::find(names.begin(), names.end(), c.name) == names.end()) continue;
     ASSERT_EQ(c.params.density, "shell") << c.name;
     ASSERT_EQ(terms_for(info, i + 1), Terms::Single) << c.name;  // as ExtremeScenes numbers them
-    Scene scene = parse_scene(c.scene, data_dir());
-    auto pipeline = make_pipeline("single", test::shared_gpu());
-    const RenderRequest request{Terms::Single, {{"samples", 5000}, {"directions", 8}}, nullptr};
-    pipeline->bake(scene, request);
-    const RenderResult r = pipeline->render(scene, request);
-    EXPECT_EQ(bad_value(r.image), "") << c.name;
-    const std::optional<Image> bound = single_bound(scene, false);
-    ASSERT_TRUE(bound) << c.name;
-    EXPECT_EQ(above_bound(r.image, *bound), "") << c.name;
+    expect_single_under_bound(c, {{"samples", 5000}, {"directions", 8}});
     ++checked;
   }
   EXPECT_EQ(checked, int(names.size()));
+}
+
+// Dense skins from the long mode that single once put above the bound (docs/STRESS.md): a
+// one-voxel slab at sigma_t x voxel 1000 at the suite's settings (6.7x: the optical depth's
+// differences stepped over the slab), and, at 5,000 samples with mesh_bound, a constant torus at
+// 30 under a grazing light (mixed/1726, 1.58x) and a torus around a blocker at 1000 (mixed/1775,
+// 1.57x), whose boundary voxels' mean extinction was a tenth of the mesh's sliver.
+TEST(SingleDense, UnderTheBound) {
+  const std::vector<StressCase> all = stress_cases(Mode::Long, data_dir());
+  const PipelineInfo& info = pipeline_info("single");
+  const std::map<std::string, Settings> cases = {
+      {"shell/slab_tau=1000", {{"samples", 200}, {"directions", 8}}},
+      {"mixed/1726", {{"samples", 5000}, {"directions", 8}, {"mesh_bound", 1}}},
+      {"mixed/1775", {{"samples", 5000}, {"directions", 8}, {"mesh_bound", 1}}}};
+  int checked = 0;
+  for (size_t i = 0; i < all.size(); ++i) {
+    const StressCase& c = all[i];
+    auto found = cases.find(c.name);
+    if (found == cases.end()) continue;
+    ASSERT_EQ(terms_for(info, i + 1), Terms::Single) << c.name;  // as ExtremeScenes numbers them
+    expect_single_under_bound(c, found->second);
+    ++checked;
+  }
+  EXPECT_EQ(checked, int(cases.size()));
 }
 
 // The suite is as large as docs/STRESS.md says, and every extreme the parser rejects is rejected
