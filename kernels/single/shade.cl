@@ -50,8 +50,9 @@ float depth_to(const Grid* g, __global const float* sigma_t, __global const floa
 // does not make a steep slope out of one side). *curv: the second differences where both sides
 // are inside (else zero). Where neither point at +-h is inside (a medium thinner than 2 h along
 // the axis: a one-voxel slab under a Gaussian wider than a voxel) the step halves, up to four
-// times: across such a slab the depth changes by its full optical thickness, which a zero slope
-// spread over the whole Gaussian (6.7x the single term's bound at sigma_t x voxel 1000).
+// times: across such a slab the depth changes by its full optical thickness, and a zero slope
+// kept the centre's transmittance over the whole Gaussian (6.7x the single term's bound at
+// sigma_t x voxel 1000).
 float3 depth_gradient(const Grid* g, __global const float* sigma_t, __global const float* bound, float3 a,
                       float tau0, float3 target,
                       int directional, float h, float4 plane, float3* curv) {
@@ -120,7 +121,8 @@ __kernel void light_transmittance(float3 origin, float voxel, int nx, int ny, in
 }
 
 // light_tr: light_count blocks of 3 * count floats from light_transmittance (light_grad alike,
-// read with `gradient`). out[i]: the factor, w the log of its scale (tr_gradient); shift[i]: the
+// read with `gradient`). out[i]: the factor, w the log of the moved Gaussian's scale (tr_gradient;
+// for tests, the splat integrates in the sample's own frame: axes[i].w); shift[i]: the
 // offset of the Gaussian's centre; per_light[4 (i light_count + l) + c]: light l's share of the
 // factor without its phase (the splat evaluates that per view ray); cut[3 i .. 3 i + 2]: the
 // depth cuts, see below.
@@ -201,7 +203,7 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
       curv += light_c / light_w;
     }
     // An optional bound on |g| s (tr_gradient_max; the depth cut below already keeps a wrong slope
-    // from brightening the Gaussian, and the splat takes the scale in log space).
+    // from brightening the Gaussian, and the splat integrates in the sample's own frame).
     float gs = length(g) * s;
     if (gs > max_gs) g *= max_gs / gs;
     if (!hessian) curv = (float3)(0.0f);
@@ -214,8 +216,9 @@ __kernel void shade_exact(float3 origin, float voxel, int nx, int ny, int nz, __
     curv = prec - inv;
     float3 gp = g + curv * d;
     offset = -gp / prec;
-    // The scale's logarithm: in a dense medium it is |g|^2 s^2 / 2, far past float's range, and
-    // the moved Gaussian's mass in the medium as small; the splat multiplies them in log space.
+    // The moved Gaussian's scale's logarithm: in a dense medium it is |g|^2 s^2 / 2, far past
+    // float's range, and the moved Gaussian's mass in the medium as small (for tests: the splat
+    // integrates about p, with depth_p).
     depth_p = dot(g, d) + 0.5f * dot(curv * d, d);
     log_scale = -depth_p + 0.5f * dot(gp * gp, 1.0f / prec);
     axis = rsqrt(prec);

@@ -1,37 +1,43 @@
 #include "pipelines/common/boundary_planes.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 
 namespace scatter {
 
 namespace {
 
-// The offset w at which the fraction `occ` of the cube [-1/2, 1/2]^3 (voxel units) lies on the
-// side n . x <= w: the occ-quantile of n . x over a k^3 lattice of the cube's points.
+// The fraction of the cube [-1/2, 1/2]^3 (voxel units) on the side n . x <= w: along the axis a
+// of n's largest component each column of the cube is cut at one point, so its fraction is
+// exact; the columns are summed over a 16 x 16 lattice of the other two axes (the sum is
+// piecewise linear in them: exact for a normal along an axis).
+double side_fraction(const Vec3& n, double w) {
+  int a = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(n[k]) > std::abs(n[a])) a = k;
+  const int b = (a + 1) % 3, c = (a + 2) % 3;
+  constexpr int k = 16;
+  double sum = 0;
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i < k; ++i) {
+      const double y = (i + 0.5) / k - 0.5, z = (j + 0.5) / k - 0.5;
+      // n_a x_a <= w - n_b y - n_c z: the column's part below (n_a > 0) or above that x_a.
+      const double cut = (w - n[b] * y - n[c] * z) / n[a];
+      sum += n[a] > 0 ? std::clamp(cut + 0.5, 0.0, 1.0) : std::clamp(0.5 - cut, 0.0, 1.0);
+    }
+  return sum / (k * k);
+}
+
+// The offset w at which the fraction `occ` of the cube lies on the side n . x <= w (bisection:
+// the fraction grows with w, from 0 at -reach to 1 at reach).
 double plane_offset(const Vec3& n, double occ) {
-  constexpr int k = 8;
-  std::array<double, k * k * k> proj;
-  int m = 0;
-  for (int z = 0; z < k; ++z)
-    for (int y = 0; y < k; ++y)
-      for (int x = 0; x < k; ++x) {
-        Vec3 p{(x + 0.5) / k - 0.5, (y + 0.5) / k - 0.5, (z + 0.5) / k - 0.5};
-        proj[m++] = dot(n, p);
-      }
-  std::sort(proj.begin(), proj.end());
-  // Each lattice point stands for 1/k^3 of the volume, centred on its projection: between the
-  // neighbours' projections the fraction moves linearly.
-  const double f = std::clamp(occ * m - 0.5, 0.0, double(m - 1));
-  const int i = std::min(int(f), m - 2);
-  const double t = f - i;
-  double w = proj[i] + t * (proj[i + 1] - proj[i]);
-  // At the ends, out to the cube's corner (all of it or none of it on the side).
   const double reach = 0.5 * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
-  if (occ * m < 0.5) w = proj[0] - (0.5 - occ * m) * 2 * (proj[0] + reach);
-  if (occ * m > m - 0.5) w = proj[m - 1] + (occ * m - (m - 0.5)) * 2 * (reach - proj[m - 1]);
-  return std::clamp(w, -reach, reach);
+  double lo = -reach, hi = reach;
+  for (int it = 0; it < 40; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (side_fraction(n, mid) < occ ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
 }
 
 }  // namespace
@@ -88,7 +94,12 @@ Vec3 inside_bound(const VoxelGrid& g, const BoundedExtinction& bounded, const Ve
   const Vec3 n{pl[0], pl[1], pl[2]};
   const double over = dot(n, p - g.center(i, j, k)) - pl[3];
   if (!(over > 0)) return p;  // inside, or no plane (n zero)
-  return p - n * (over + 1e-3 * g.voxel);
+  // Kept in the voxel (near a corner the plane's foot may lie outside it).
+  const Vec3 lo = g.origin + Vec3{double(i), double(j), double(k)} * g.voxel, e{1e-3, 1e-3, 1e-3};
+  const Vec3 q2 = p - n * (over + 1e-3 * g.voxel), hi = lo + Vec3{1, 1, 1} * g.voxel;
+  return {std::clamp(q2.x, lo.x + e.x * g.voxel, hi.x - e.x * g.voxel),
+          std::clamp(q2.y, lo.y + e.y * g.voxel, hi.y - e.y * g.voxel),
+          std::clamp(q2.z, lo.z + e.z * g.voxel, hi.z - e.z * g.voxel)};
 }
 
 }  // namespace scatter

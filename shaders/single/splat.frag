@@ -84,9 +84,8 @@ float expo(float s) { return -((ea * s + eb) * s + ec); }
 // term; mixed/1775, 4x its bound).
 float erf_span(float s1, float s2) {
   float z1 = ek * (s1 - es), z2 = ek * (s2 - es);
-  // The common case (the vertex on the segment, or a peak of at most one): erf differences.
-  float peak = ea * es * es - ec;  // E(es), to within float where it is far
-  if (peak <= 0.0 || (z1 < 0.0 && z2 > 0.0)) return exp(peak) * (erf_approx(z2) - erf_approx(z1));
+  // The vertex on the segment: erf differences (its peak E(es) is then a small number).
+  if (z1 < 0.0 && z2 > 0.0) return exp(ea * es * es - ec) * (erf_approx(z2) - erf_approx(z1));
   if (z1 >= 0.0) return exp(expo(s1)) * erfcx(z1) - exp(expo(s2)) * erfcx(z2);
   return exp(expo(s2)) * erfcx(-z2) - exp(expo(s1)) * erfcx(-z1);
 }
@@ -102,7 +101,7 @@ vec3 ray_factor(vec3 d) {
   if (per_ray_phase == 0) return factor;
   vec3 sum = vec3(0.0);
   for (int l = 0; l < light_count; ++l) {
-    vec3 wl = light_type[l] == 1 ? -light_direction[l] : normalize(light_position[l] - center);
+    vec3 wl = light_type[l] == 1 ? -light_direction[l] : normalize(light_position[l] - own_center);
     sum += light_factor[sample_index * light_count + l].rgb * hg(dot(wl, d));
   }
   return sum;
@@ -119,7 +118,7 @@ void clip_chord(vec4 plane, vec3 d, inout float x, inout float y) {
 const float OPEN = 1e30;  // an interval's open end
 const vec2 EVERYWHERE = vec2(-OPEN, OPEN), NOWHERE = vec2(OPEN, -OPEN);
 
-// Where along the ray the quadratic model's optical depth, tau_c + g . e + 1/2 sum_k curv_k e_k^2
+// Where along the ray the quadratic model's optical depth, tau_p + g . e + 1/2 sum_k curv_k e_k^2
 // with e = o + s d the offset from own_center (s = t - tp), is >= 0: up to two intervals of s,
 // keep0 and keep1 (empty: y <= x). In s it is a s^2 + b s + c; over a chord
 // of half length hc where the s^2 term is negligible, a half-line.
@@ -203,7 +202,7 @@ void main() {
   vec2 keep0 = EVERYWHERE, keep1 = NOWHERE;
 #ifdef QUAD_CUT
   if (any(lessThan(quad_curv.xyz, vec3(0.0)))) {
-    quad_keep(d, o, half_chord, keep0, keep1);
+    quad_keep(d, o, half_chord + abs(tm - tp), keep0, keep1);  // s reaches that far from tp
     keep0 += tp;
     keep1 += tp;
   }

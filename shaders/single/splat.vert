@@ -17,7 +17,7 @@ layout(std430, binding = 8) readonly buffer Planes { vec4 plane[]; };
 // Where the transmittance model's optical depth is negative (exact_tr with tr_gradient:
 // kernels/single/shade.cl), three a sample: cut[3 i], the linear model's, integrate only where
 // n . x <= d (zeros: everywhere); cut[3 i + 1] and cut[3 i + 2], the quadratic model's about the
-// moved centre c, tau_c + g . (x - c) + 1/2 sum_k curv_k (x_k - c_k)^2 as (g, tau_c) and
+// sample's own centre p, tau_p + g . (x - p) + 1/2 sum_k curv_k (x_k - p_k)^2 as (g, tau_p) and
 // (curv, 0), integrate only where it is >= 0 (zeros: everywhere).
 layout(std430, binding = 9) readonly buffer Cuts { vec4 cut[]; };
 
