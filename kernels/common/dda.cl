@@ -94,21 +94,6 @@ bool dda_next(Dda* s, float* a, float* b, int3* cell) {
 }
 
 // Exact optical depth of `channel` along o + t d, t in [t0, t1] (piecewise-constant voxels).
-float optical_depth(const Grid* g, __global const float* sigma_t, int channel, float3 o, float3 d,
-                    float t0, float t1) {
-  float g0, g1;
-  if (!grid_interval(g, o, d, &g0, &g1)) return 0.0f;
-  g0 = fmax(g0, t0);
-  g1 = fmin(g1, t1);
-  if (g1 <= g0) return 0.0f;
-  Dda s;
-  dda_init(&s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), g0, g1);
-  float tau = 0.0f, a, b;
-  int3 c;
-  while (dda_next(&s, &a, &b, &c)) tau += sigma_t[3 * voxel_index(g, c.x, c.y, c.z) + channel] * (b - a);
-  return tau;
-}
-
 // A traversal of the grid's voxels along o + t d over [t0, t1]; false if that misses the grid.
 bool dda_over(const Grid* g, float3 o, float3 d, float t0, float t1, Dda* s) {
   float g0, g1;
@@ -118,6 +103,16 @@ bool dda_over(const Grid* g, float3 o, float3 d, float t0, float t1, Dda* s) {
   if (g1 <= g0) return false;
   dda_init(s, o, d, g->origin, g->voxel, (int3)(g->nx, g->ny, g->nz), g0, g1);
   return true;
+}
+
+float optical_depth(const Grid* g, __global const float* sigma_t, int channel, float3 o, float3 d,
+                    float t0, float t1) {
+  Dda s;
+  if (!dda_over(g, o, d, t0, t1, &s)) return 0.0f;
+  float tau = 0.0f, a, b;
+  int3 c;
+  while (dda_next(&s, &a, &b, &c)) tau += sigma_t[3 * voxel_index(g, c.x, c.y, c.z) + channel] * (b - a);
+  return tau;
 }
 
 // The three channels' optical depths along one traversal: per channel the same sums, in the same
@@ -145,9 +140,10 @@ float inside_length(float4 plane, float3 c, float3 o, float3 d, float a, float b
 
 // optical_depth3 where a voxel's medium may end at a plane (`bound`, 4 floats a voxel: see
 // inside_length; pipelines/common/boundary_planes.hpp): each voxel's coefficient times the length
-// of the segment on the plane's inside.
+// of the segment on the plane's inside. A null `bound`: optical_depth3 (no plane to read).
 float3 optical_depth3_bounded(const Grid* g, __global const float* sigma_t, __global const float* bound,
                               float3 o, float3 d, float t0, float t1) {
+  if (bound == 0) return optical_depth3(g, sigma_t, o, d, t0, t1);
   Dda s;
   if (!dda_over(g, o, d, t0, t1, &s)) return (float3)(0.0f);
   float3 tau = (float3)(0.0f);

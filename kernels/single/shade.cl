@@ -25,11 +25,13 @@ float mean_depth(const Grid* g, __global const float* sigma_t, __global const fl
   return (tau.x + tau.y + tau.z) / 3.0f;
 }
 
-// Inside a voxel with extinction, on its plane's inside (bound: boundary_planes.hpp).
+// Inside a voxel with extinction, on its plane's inside (bound: boundary_planes.hpp; null: no
+// planes, mesh_bound 0).
 bool in_medium(const Grid* g, __global const float* sigma_t, __global const float* bound, float3 p) {
   int3 c = voxel_of(g, p);
   if (!(voxel_sigma(g, sigma_t, c, 0) + voxel_sigma(g, sigma_t, c, 1) + voxel_sigma(g, sigma_t, c, 2) > 0.0f))
     return false;
+  if (bound == 0) return true;
   float4 plane = vload4(voxel_index(g, c.x, c.y, c.z), bound);
   float3 centre = g->origin + g->voxel * (convert_float3(c) + 0.5f);
   return dot(plane.xyz, p - centre) <= plane.w;

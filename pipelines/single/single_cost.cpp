@@ -81,8 +81,8 @@ CostEstimate SinglePipeline::estimate(const Scene& scene, const RenderRequest& r
   const double pieces = 2 * samples, lights = std::max<size_t>(scene.lights.size(), 1);
   frame.host("scene.voxels", n * kGridBytes, grid + " x 29 B (the grid kept for exact_tr)");
   frame.host("settings.samples", 2 * samples * (15 + 3 * nc) * 4, "the product");
-  // sigma_t and the (zero) planes; with mesh_bound the bounded medium's as well.
-  const double voxel_bytes = s.exact_tr ? (s.mesh_bound ? 56 : 28) : 0;
+  // sigma_t; with mesh_bound the bounded medium's and its planes as well.
+  const double voxel_bytes = s.exact_tr ? (s.mesh_bound ? 40 : 12) : 0;
   frame.device("scene.voxels", n * voxel_bytes,
                grid + " x " + std::to_string(int(voxel_bytes)) + " B (sigma_t, planes)");
   frame.device(

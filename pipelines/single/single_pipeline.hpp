@@ -178,9 +178,9 @@ class SinglePipeline : public Pipeline {
   gpu::GlObject splat_quad_program_;
   gpu::GlObject positions_, weights_, sigma_s_, sh_, colors_, sigmas_, shifts_, axes_, planes_,
       cuts_, light_factors_;
-  cl::Buffer cl_sigma_t_, cl_no_bound_, cl_bounded_sigma_t_, cl_bound_, cl_bounded_at_, cl_at_,
-      cl_position_, cl_sigma_, cl_weight_, cl_coarse_weight_, cl_sigma_s_, cl_plane_, cl_out_,
-      cl_shift_, cl_axes_, cl_cut_, cl_light_factor_;
+  cl::Buffer cl_sigma_t_, cl_bounded_sigma_t_, cl_bound_, cl_bounded_at_, cl_at_, cl_position_,
+      cl_sigma_, cl_weight_, cl_coarse_weight_, cl_sigma_s_, cl_plane_, cl_out_, cl_shift_,
+      cl_axes_, cl_cut_, cl_light_factor_;
   size_t light_factor_floats_ = 0;  // the size of light_factors_ and cl_light_factor_
 };
 

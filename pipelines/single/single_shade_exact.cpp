@@ -16,11 +16,10 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
   const VoxelGrid& g = *current_.grid;
   gpu::ClContext& cl = gpu_.cl();
   if (!current_.cl_uploaded) {
-    // The voxels' mean extinction, no planes, the baked anchors (mesh_bound 0).
+    // The voxels' mean extinction and the baked anchors (mesh_bound 0: no planes, a null buffer).
     std::vector<float> st(g.sigma_s.size());
     for (size_t i = 0; i < st.size(); ++i) st[i] = g.sigma_s[i] + g.sigma_a[i];
     cl_sigma_t_ = scatter::upload(cl, st);
-    cl_no_bound_ = scatter::upload(cl, std::vector<float>(4 * std::max<size_t>(g.count(), 1), 0.f));
     cl_at_ = scatter::upload(cl, b.depth_at);
     cl_position_ = scatter::upload(cl, b.position);
     cl_sigma_ = scatter::upload(cl, b.sigma);
@@ -61,7 +60,7 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
     current_.cl_bounded = true;
   }
   const cl::Buffer& sigma_t = mesh_bound ? cl_bounded_sigma_t_ : cl_sigma_t_;
-  const cl::Buffer& bound = mesh_bound ? cl_bound_ : cl_no_bound_;
+  const cl::Buffer bound = mesh_bound ? cl_bound_ : cl::Buffer();  // null: the kernels read none
   const cl::Buffer& anchors = mesh_bound ? cl_bounded_at_ : cl_at_;
   const std::vector<std::string> program = with_cl_library({"kernels/single/shade.cl"});
   cl::Buffer lights = scatter::upload(cl, pack_lights(scene.lights));
