@@ -90,12 +90,15 @@ void for_support(const VoxelGrid& g, const Vec3& p, double s, F&& f) {
 // over the medium and all but the outermost of the `shell` layers (`layer`: 0 medium, d the d-th
 // shell layer, 255 outside), the coverage statistics, and each sample's sigma_s (the weighted
 // mean, then `sigma_fit` passes). `report` gets the fraction done.
-// Step 4b (pipelines/single/single_split.cpp): splits the medium's samples whose support crosses
-// an extinction jump above `ratio` (<= 1: none) into two pieces clipped by the interface plane;
-// fills bake.plane (4 per piece, n . x <= d; zeros for an unclipped one) and returns the number
-// of samples split (bake.count grows by as many).
+// Step 4b (pipelines/single/single_split.cpp): splits the samples (the shell's too) whose support
+// crosses an extinction jump above `ratio` (<= 1: none) into two pieces clipped by the interface
+// plane; fills bake.plane (4 per piece, n . x <= d; zeros for an unclipped one) and returns the
+// number of samples split (bake.count grows by as many). `medium` gets each piece's range of
+// extinction per unit medium (2 per piece, lo and hi): the voxels its sigma_s is taken from (its
+// own side's medium, within `ratio` of the extinction at the centre or at the nearest cell across
+// the jump; everything for an unsplit sample).
 int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double ratio,
-                   SingleBake& bake);
+                   SingleBake& bake, std::vector<float>& medium);
 
 void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell,
                     const SingleBakeParams& p, SingleBake& bake,

@@ -19,7 +19,7 @@
 //              `weight_fit` (20) least-squares iterations (CGLS) towards the same; a sample whose
 //              Gaussian crosses a jump in the extinction (ratio above `split`, 2; 0 never) becomes
 //              two pieces clipped by the interface plane (single_split.cpp); each sample's
-//              (piece's) sigma_s is the Gaussian-weighted mean of the medium around it on its side,
+//              (piece's) sigma_s is the Gaussian-weighted mean of its own medium on its side,
 //              then `sigma_fit` (8) passes fit the splatted field to the voxels
 //   sh         exact optical depth per channel from every sample along every direction (DDA),
 //              projected onto `sh_order`^2 real spherical harmonics: of exp(-tau) (the paper, the

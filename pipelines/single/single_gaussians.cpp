@@ -170,8 +170,16 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
               : 0;
   // Pieces at jumps (pipelines/single/single_split.cpp); from here on a piece's Gaussian counts
   // only on its side of its plane.
-  bake.split = split_at_jumps(g, layer, p.split, bake);
+  std::vector<float> medium;
+  bake.split = split_at_jumps(g, layer, p.split, bake, medium);
   const int pieces = bake.count;
+  // Whether voxel v's medium (extinction per unit medium) is piece i's to take sigma_s from.
+  auto own_medium = [&](int i, size_t v) {
+    const double o = g.occupancy[v];
+    if (!(o > 0)) return false;
+    const double e = extinction(g, v) / o;
+    return e >= medium[2 * size_t(i)] && e <= medium[2 * size_t(i) + 1];
+  };
   auto for_piece = [&](int i, auto&& f) {
     const float* pl = &bake.plane[4 * size_t(i)];
     const Vec3 nrm{pl[0], pl[1], pl[2]};
@@ -188,6 +196,7 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
     for (size_t i = a; i < b; ++i) {
       double acc[3] = {0, 0, 0}, occ = 0;
       for_piece(int(i), [&](size_t v, double e) {
+        if (!own_medium(int(i), v)) return;
         for (int c = 0; c < 3; ++c) acc[c] += e * g.sigma_s[3 * v + c];
         occ += e * g.occupancy[v];
       });
@@ -225,7 +234,7 @@ void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int s
           double acc[3] = {0, 0, 0}, occ = 0;
           for_piece(int(i), [&](size_t v, double e) {
             double o = g.occupancy[v];
-            if (o <= 0) return;
+            if (o <= 0 || !own_medium(int(i), v)) return;
             for (int c = 0; c < 3; ++c) acc[c] += e * (g.sigma_s[3 * v + c] - o * field[3 * v + c]);
             occ += e * o;
           });

@@ -21,8 +21,9 @@ namespace scatter {
 namespace {
 
 // Bump when the bake's results change, so old cache entries are not reused.
-// 8: samples in progressive order; 9: sigma at least kMinSigmaVoxels
-constexpr const char* kSingleBakeVersion = "single-9";
+// 8: samples in progressive order; 9: sigma at least kMinSigmaVoxels; 10: splits from empty
+// voxels and the shell, each piece's sigma_s from its own medium
+constexpr const char* kSingleBakeVersion = "single-10";
 
 }  // namespace
 

@@ -8,6 +8,7 @@
 // integral at its plane (shaders/single/splat.frag).
 #include <algorithm>
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <numbers>
 
@@ -18,25 +19,29 @@ namespace {
 
 struct Split {
   bool made = false;
-  Vec3 n;         // the other side's direction
-  double offset;  // plane: n . (x - centre) = offset (> 0: the centre is on its own side)
-  Vec3 anchor;    // a point of the medium on the other side
+  Vec3 n;             // the other side's direction
+  double offset;      // plane: n . (x - centre) = offset (> 0: the centre is on its own side)
+  Vec3 anchor;        // a point of the medium on the other side
+  double own, other;  // extinction at the centre's voxel and at the nearest cell across
 };
 
 // The interface plane in a sample's support, if a jump is there. Voxels count only where they
 // are all medium (the surface's partial voxels are the mesh's, clipped by the depth peel).
-Split find_split(const VoxelGrid& g, const Vec3& c, double s, double ratio) {
+Split find_split(const VoxelGrid& g, const Vec3& c, size_t cv, double s, double ratio) {
   Split out;
-  const size_t cv = voxel_at(g, c);
+  // The extinction of the centre's voxel, or of a shell sample's anchor, as the grid holds it (a
+  // boundary voxel's is its medium fraction's: one less than 1 / ratio full splits from the full
+  // voxels inside). A centre in an empty part (zero extinction) splits too: from a layer without
+  // medium the next layer's jump is infinite.
+  if (!(g.occupancy[cv] > 0)) return out;
   const double own = extinction(g, cv);
-  if (!(g.occupancy[cv] > 0) || own <= 0) return out;
   struct Cell {
     Vec3 d;
     double e;
     bool other;
   };
   std::vector<Cell> cells;
-  double nearest = 1e30;
+  double nearest = 1e30, across = 0;
   Vec3 towards;
   for_support(g, c, s, [&](size_t v, double e) {
     if (g.occupancy[v] < 0.999f) return;
@@ -47,27 +52,35 @@ Split find_split(const VoxelGrid& g, const Vec3& c, double s, double ratio) {
     if (other && dot(d, d) < nearest) {
       nearest = dot(d, d);
       towards = d;
+      across = st;
     }
   });
   if (nearest >= 1e30) return out;
   // The other side nearest the centre (a layer's far interface is left to its own samples):
-  // the plane's normal from the weighted centroids of that side and of the own side.
-  Vec3 so{0, 0, 0}, oo{0, 0, 0};
-  double ws = 0, wo = 0;
-  for (const Cell& k : cells) {
-    if (k.other && dot(k.d, towards) <= 0) continue;
-    (k.other ? oo : so) = (k.other ? oo : so) + k.d * k.e;
-    (k.other ? wo : ws) += k.e;
+  // the plane's normal from the weighted centroids of that side and of the own side. The other
+  // side's cells are those in front of the centre along the normal, which starts as the nearest
+  // such cell's direction and is refined: that direction is diagonal unless the centre faces a
+  // cell squarely, and a half-space across it keeps an oblique part of a layer, tilting the
+  // plane.
+  Vec3 n = towards * (1 / std::sqrt(nearest));
+  for (int pass = 0; pass < 3; ++pass) {
+    Vec3 so{0, 0, 0}, oo{0, 0, 0};
+    double ws = 0, wo = 0;
+    for (const Cell& k : cells) {
+      if (k.other && dot(k.d, n) <= 0) continue;
+      (k.other ? oo : so) = (k.other ? oo : so) + k.d * k.e;
+      (k.other ? wo : ws) += k.e;
+    }
+    if (ws <= 0 || wo <= 0) return out;
+    const Vec3 next = oo * (1 / wo) - so * (1 / ws);
+    const double len = std::sqrt(dot(next, next));
+    if (len <= 0) return out;
+    n = next * (1 / len);
   }
-  if (ws <= 0 || wo <= 0) return out;
-  Vec3 n = oo * (1 / wo) - so * (1 / ws);
-  const double len = std::sqrt(dot(n, n));
-  if (len <= 0) return out;
-  n = n * (1 / len);
   // The offset that best separates the two sides (fewest weighted cells on the wrong side).
   std::vector<std::pair<double, double>> proj;  // projection, +e for own, -e for other
   for (const Cell& k : cells) {
-    if (k.other && dot(k.d, towards) <= 0) continue;
+    if (k.other && dot(k.d, n) <= 0) continue;
     proj.push_back({dot(k.d, n), k.other ? -k.e : k.e});
   }
   std::sort(proj.begin(), proj.end());
@@ -100,22 +113,32 @@ Split find_split(const VoxelGrid& g, const Vec3& c, double s, double ratio) {
   out.n = n;
   out.offset = at;
   out.anchor = c + n * std::max(mean, at + 0.5 * g.voxel);
+  out.own = own;
+  out.other = across;
   return out;
 }
 
 }  // namespace
 
 int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double ratio,
-                   SingleBake& bake) {
+                   SingleBake& bake, std::vector<float>& medium) {
   const int n = bake.count;
   bake.plane.assign(4 * size_t(n), 0.f);
+  medium.clear();
+  for (int i = 0; i < n; ++i) medium.insert(medium.end(), {0.f, FLT_MAX});
   if (ratio <= 1) return 0;
   std::vector<Split> splits(n);
   parallel_for(size_t(n), [&](size_t a, size_t b, size_t) {
     for (size_t i = a; i < b; ++i) {
       Vec3 c{bake.position[3 * i], bake.position[3 * i + 1], bake.position[3 * i + 2]};
-      if (layer[voxel_at(g, c)] != 0) continue;  // the shell's samples are clipped by the mesh
-      splits[i] = find_split(g, c, bake.sigma[i], ratio);
+      // A shell sample (outside the medium, clipped by the mesh) takes its anchor's medium as
+      // its own: its Gaussian reaches in across the layers under the surface as well.
+      const size_t cv = voxel_at(g, c);
+      const size_t own = layer[cv] == 0
+                             ? cv
+                             : voxel_at(g, {bake.depth_at[3 * i], bake.depth_at[3 * i + 1],
+                                            bake.depth_at[3 * i + 2]});
+      splits[i] = find_split(g, c, own, bake.sigma[i], ratio);
     }
   });
   int made = 0;
@@ -130,12 +153,25 @@ int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double
                 &bake.plane[4 * size_t(i)]);
     // The new piece: -n . x <= -d.
     bake.position.insert(bake.position.end(), {float(c.x), float(c.y), float(c.z)});
-    bake.depth_at.insert(bake.depth_at.end(),
-                         {float(s.anchor.x), float(s.anchor.y), float(s.anchor.z)});
+    // Its anchor moves with the sample's own (a shell sample measures from inside the medium),
+    // and where that leaves the medium (a shell sample beside an edge), back towards the own
+    // anchor until it is inside.
+    const Vec3 own{bake.depth_at[3 * size_t(i)], bake.depth_at[3 * size_t(i) + 1],
+                   bake.depth_at[3 * size_t(i) + 2]};
+    Vec3 a = s.anchor + (own - c);
+    for (int k = 0; k < 8 && !(g.occupancy[voxel_at(g, a)] > 0); ++k) a = (a + own) * 0.5;
+    if (!(g.occupancy[voxel_at(g, a)] > 0)) a = own;
+    bake.depth_at.insert(bake.depth_at.end(), {float(a.x), float(a.y), float(a.z)});
     bake.sigma.push_back(bake.sigma[i]);
     bake.weight.push_back(bake.weight[i]);
     if (!bake.coarse_weight.empty()) bake.coarse_weight.push_back(bake.coarse_weight[i]);
     bake.plane.insert(bake.plane.end(), {float(-s.n.x), float(-s.n.y), float(-s.n.z), float(-d)});
+    // Each piece's sigma_s from its own side's medium only: a Gaussian wider than a layer reaches
+    // past the next interface too, and a piece whose mean took in the layer beyond (a dense one
+    // past an empty one) would carry it into the empty layer.
+    medium[2 * size_t(i)] = float(s.own / ratio);
+    medium[2 * size_t(i) + 1] = float(s.own * ratio);
+    medium.insert(medium.end(), {float(s.other / ratio), float(s.other * ratio)});
   }
   bake.count = n + made;
   return made;

@@ -7,6 +7,8 @@
 #include <random>
 
 #include "../../test_util.hpp"
+#include "pipelines/single/bake_support.hpp"
+#include "scene/scene.hpp"
 #include "single_fixture.hpp"
 
 namespace scatter {
@@ -122,6 +124,70 @@ TEST_F(SinglePipelineTest, SplitBringsLayersCloserToTheReference) {
   std::printf("layers 32^3 at 6000 samples: relative RMSE %.4f (whole) -> %.4f (split)\n", whole,
               split);
   EXPECT_LT(split, 0.9 * whole);
+}
+
+// One-voxel layers of density 1, 0, 0.001, 0.5 (10 mean free paths a voxel in the densest), the
+// stress suite's mixed/102, sampled coarser than the layers (200 samples, 8^3 voxels): Gaussians
+// a voxel and a half wide reach across two interfaces. The empty layer must stay nearly empty:
+// a piece on its side takes sigma_s only from its own side's medium (not the dense layer beyond),
+// samples centred in it and the shell's samples split too, and the planes lie along the layers.
+TEST(SingleSplit, EmptyLayerStaysEmptyUnderCoarseSamples) {
+  const nlohmann::json j = {
+      {"mesh", {{"shape", "box"}, {"size", {2, 2, 2}}}},
+      {"medium",
+       {{"sigma_s", 20},
+        {"sigma_a", 20},
+        {"g", 0},
+        {"density",
+         {{"type", "layers"},
+          {"axis", {0, 1, 0}},
+          {"thickness", 0.25},
+          {"values", {1, 0, 0.001, 0.5}}}}}},
+      {"lights", {{{"type", "directional"}, {"direction", {0, 0, -1}}, {"irradiance", 1}}}},
+      {"camera", {{"position", {0, 0, 4}}, {"target", {0, 0, 0}}}},
+      {"image", {{"width", 16}, {"height", 16}}},
+      {"voxels", 8}};
+  Scene s = parse_scene(j, ".");
+  VoxelGrid grid = voxelize(s, {.resolution = s.voxels, .margin = kSingleGridMargin});
+  SingleBakeParams p;
+  p.samples = 200;
+  p.directions = 8;
+  SingleBake b = bake_single(test::shared_gpu().cl(), grid, p);
+  ASSERT_GT(b.split, 0);
+  // The empty layers (values[1], y in [-0.75, -0.5] and [0.25, 0.5]) away from their interfaces.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.95, 0.95), v(0.05, 0.2);
+  double empty = 0, dense = 0;
+  for (int k = 0; k < 400; ++k) {
+    const double y0 = k % 2 ? -0.75 : 0.25;
+    empty += splatted_sigma_s(b, {u(rng), y0 + v(rng), u(rng)});
+    dense += splatted_sigma_s(b, {u(rng), y0 - 0.25 + v(rng), u(rng)});  // values[0]
+  }
+  std::printf("splatted sigma_s: empty layers %.4f, dense layers %.4f (truth 0, 20)\n", empty / 400,
+              dense / 400);
+  EXPECT_NEAR(dense / 400, 20, 5);
+  // Before the empty layer's own split and the pieces' own media: 3.15 (16 % of the dense
+  // layer's), now 0.74.
+  EXPECT_LT(empty / 400, 0.06 * 20);
+  int medium_planes = 0;
+  // Every piece measures its transmittance from inside the medium (a shell sample's new piece
+  // moves with its anchor) and on its own side of its plane.
+  for (int i = 0; i < b.count; ++i) {
+    const Vec3 a{b.depth_at[3 * size_t(i)], b.depth_at[3 * size_t(i) + 1],
+                 b.depth_at[3 * size_t(i) + 2]};
+    EXPECT_GT(grid.occupancy[single_detail::voxel_at(grid, a)], 0.f) << "piece " << i;
+    const float* pl = &b.plane[4 * size_t(i)];
+    if (pl[0] == 0 && pl[1] == 0 && pl[2] == 0) continue;
+    // A medium sample's plane lies along the layers (a shell sample's, outside an edge of the
+    // box, sees few cells; the mesh clips it anyway).
+    const Vec3 c{b.position[3 * size_t(i)], b.position[3 * size_t(i) + 1],
+                 b.position[3 * size_t(i) + 2]};
+    if (std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)}) < 1) {
+      EXPECT_GT(std::abs(pl[1]), 0.995) << "piece " << i << ": a plane across the layers";
+      ++medium_planes;
+    }
+  }
+  EXPECT_GT(medium_planes, b.split / 2);
 }
 
 }  // namespace
