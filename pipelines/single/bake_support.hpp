@@ -95,10 +95,17 @@ void for_support(const VoxelGrid& g, const Vec3& p, double s, F&& f) {
 // plane; fills bake.plane (4 per piece, n . x <= d; zeros for an unclipped one) and returns the
 // number of samples split (bake.count grows by as many). `medium` gets each piece's range of
 // extinction per unit medium (2 per piece, lo and hi): the voxels its sigma_s is taken from (its
-// own side's medium, within `ratio` of the extinction at the centre or at the nearest cell across
-// the jump; everything for an unsplit sample).
+// own side's medium: within `ratio` of the extinction per unit medium of its own voxel, for the
+// centre's piece, or of the nearest voxel across the jump, for the new one; everything for an
+// unsplit sample).
 int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double ratio,
                    SingleBake& bake, std::vector<float>& medium);
+
+// The pieces' planes in the frame of their anchors (4 per piece, as bake.plane): a shell
+// sample's anchor is its position moved into the medium, and its pieces' one-sided differences
+// (kernels/single/shade.cl) are tested against its planes moved the same way. The splat clips
+// with bake.plane itself. The k-th split sample's new piece is piece count - split + k.
+std::vector<float> depth_frame_planes(const SingleBake& b);
 
 void make_gaussians(const VoxelGrid& g, const std::vector<uint8_t>& layer, int shell,
                     const SingleBakeParams& p, SingleBake& bake,

@@ -6,6 +6,7 @@
 #include "pipelines/common/boundary_planes.hpp"
 #include "pipelines/common/cl_library.hpp"
 #include "pipelines/common/cl_scene.hpp"
+#include "pipelines/single/bake_support.hpp"
 #include "pipelines/single/single_pipeline.hpp"
 
 namespace scatter {
@@ -27,8 +28,11 @@ void SinglePipeline::shade_exact(const Scene& scene, const DrawnSamples& drawn, 
     // Without a coarse set (under 1024 samples) the same buffer: drawn.coarse is never set then.
     cl_coarse_weight_ = b.coarse_weight.empty() ? cl_weight_ : scatter::upload(cl, b.coarse_weight);
     cl_sigma_s_ = scatter::upload(cl, b.sigma_s);
-    cl_plane_ = scatter::upload(
-        cl, b.plane.empty() ? std::vector<float>(size_t(std::max(b.count, 1)) * 4, 0.f) : b.plane);
+    // The pieces' planes in their anchors' frame (a split shell sample's anchor is moved into the
+    // medium; its differences are tested on its side of its plane moved with it).
+    cl_plane_ = scatter::upload(cl, b.plane.empty()
+                                        ? std::vector<float>(size_t(std::max(b.count, 1)) * 4, 0.f)
+                                        : single_detail::depth_frame_planes(b));
     cl_out_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY,
                          size_t(std::max(b.count, 1)) * 4 * sizeof(float));
     cl_shift_ = cl::Buffer(cl.context(), CL_MEM_WRITE_ONLY,

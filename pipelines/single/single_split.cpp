@@ -19,20 +19,22 @@ namespace {
 
 struct Split {
   bool made = false;
-  Vec3 n;             // the other side's direction
-  double offset;      // plane: n . (x - centre) = offset (> 0: the centre is on its own side)
-  Vec3 anchor;        // a point of the medium on the other side
-  double own, other;  // extinction at the centre's voxel and at the nearest cell across
+  Vec3 n;         // the other side's direction
+  double offset;  // plane: n . (x - centre) = offset (> 0: the centre is on its own side)
+  Vec3 anchor;    // a point of the medium on the other side
+  Vec3 cell;      // the centre of the nearest voxel across (all medium)
+  // Extinction per unit medium of the own voxel (the centre's, or a shell sample's anchor's) and
+  // of the nearest voxel across: the pieces' media (their sigma_s is taken from within `ratio`).
+  double own, other;
 };
 
 // The interface plane in a sample's support, if a jump is there. Voxels count only where they
 // are all medium (the surface's partial voxels are the mesh's, clipped by the depth peel).
 Split find_split(const VoxelGrid& g, const Vec3& c, size_t cv, double s, double ratio) {
   Split out;
-  // The extinction of the centre's voxel, or of a shell sample's anchor, as the grid holds it (a
-  // boundary voxel's is its medium fraction's: one less than 1 / ratio full splits from the full
-  // voxels inside). A centre in an empty part (zero extinction) splits too: from a layer without
-  // medium the next layer's jump is infinite.
+  // The own voxel (cv: the centre's, or a shell sample's anchor's) compared by its extinction as
+  // the grid holds it (a boundary voxel's is its medium fraction's). A medium voxel of zero
+  // extinction (an empty layer) splits too: any medium beside it is an infinite jump.
   if (!(g.occupancy[cv] > 0)) return out;
   const double own = extinction(g, cv);
   struct Cell {
@@ -113,7 +115,8 @@ Split find_split(const VoxelGrid& g, const Vec3& c, size_t cv, double s, double 
   out.n = n;
   out.offset = at;
   out.anchor = c + n * std::max(mean, at + 0.5 * g.voxel);
-  out.own = own;
+  out.cell = c + towards;
+  out.own = own / g.occupancy[cv];
   out.other = across;
   return out;
 }
@@ -153,14 +156,21 @@ int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double
                 &bake.plane[4 * size_t(i)]);
     // The new piece: -n . x <= -d.
     bake.position.insert(bake.position.end(), {float(c.x), float(c.y), float(c.z)});
-    // Its anchor moves with the sample's own (a shell sample measures from inside the medium),
-    // and where that leaves the medium (a shell sample beside an edge), back towards the own
-    // anchor until it is inside.
-    const Vec3 own{bake.depth_at[3 * size_t(i)], bake.depth_at[3 * size_t(i) + 1],
-                   bake.depth_at[3 * size_t(i) + 2]};
-    Vec3 a = s.anchor + (own - c);
-    for (int k = 0; k < 8 && !(g.occupancy[voxel_at(g, a)] > 0); ++k) a = (a + own) * 0.5;
-    if (!(g.occupancy[voxel_at(g, a)] > 0)) a = own;
+    // Its anchor moves with the sample's own (a shell sample measures from inside the medium; the
+    // shading tests its differences against the plane moved the same way, depth_frame_planes),
+    // and where that leaves the medium (a shell sample beside an edge, a thin layer's end),
+    // towards the point just across the plane until it is inside, else the nearest voxel across
+    // (moved, then not): the first inside the medium and across the moved plane.
+    const Vec3 shift = Vec3{bake.depth_at[3 * size_t(i)], bake.depth_at[3 * size_t(i) + 1],
+                            bake.depth_at[3 * size_t(i) + 2]} -
+                       c;
+    auto usable = [&](const Vec3& x) {
+      return g.occupancy[voxel_at(g, x)] > 0 && dot(s.n, x - shift) >= d;
+    };
+    const Vec3 across = c + shift + s.n * (s.offset + 0.25 * g.voxel);
+    Vec3 a = s.anchor + shift;
+    for (int k = 0; k < 8 && !usable(a); ++k) a = (a + across) * 0.5;
+    if (!usable(a)) a = usable(across) ? across : usable(s.cell + shift) ? s.cell + shift : s.cell;
     bake.depth_at.insert(bake.depth_at.end(), {float(a.x), float(a.y), float(a.z)});
     bake.sigma.push_back(bake.sigma[i]);
     bake.weight.push_back(bake.weight[i]);
@@ -175,6 +185,26 @@ int split_at_jumps(const VoxelGrid& g, const std::vector<uint8_t>& layer, double
   }
   bake.count = n + made;
   return made;
+}
+
+std::vector<float> depth_frame_planes(const SingleBake& b) {
+  std::vector<float> out = b.plane;
+  const int whole = b.count - b.split;
+  int piece = whole;
+  for (int i = 0; i < whole && !b.plane.empty(); ++i) {
+    const float* pl = &b.plane[4 * size_t(i)];
+    if (pl[0] == 0 && pl[1] == 0 && pl[2] == 0) continue;
+    // The sample's shift from its position to its own anchor (zero inside the medium).
+    const double dx = b.depth_at[3 * size_t(i)] - b.position[3 * size_t(i)],
+                 dy = b.depth_at[3 * size_t(i) + 1] - b.position[3 * size_t(i) + 1],
+                 dz = b.depth_at[3 * size_t(i) + 2] - b.position[3 * size_t(i) + 2];
+    for (int k : {i, piece}) {
+      float* q = &out[4 * size_t(k)];
+      q[3] = float(q[3] + q[0] * dx + q[1] * dy + q[2] * dz);
+    }
+    ++piece;
+  }
+  return out;
 }
 
 }  // namespace scatter::single_detail

