@@ -346,7 +346,8 @@ RenderResult SinglePipeline::render(const Scene& scene, const RenderRequest& req
   clock.stop("splat");
 
   if (stride > 1) {
-    result.image = upsample(out, {&front, &back, &third, &fourth}, stride, s.clip_back, inside);
+    result.image = upsample(out, {&front, &back, &third, &fourth}, stride, s.clip_back, inside,
+                            scene, per_ray);
     clock.stop("upsample");
   } else {
     result.image = out.read_color();

@@ -163,9 +163,10 @@ class SinglePipeline : public Pipeline {
                    double max_gs, bool mesh_bound);
   // splat_scale: the image from `splat` (one pixel in stride x stride) and the image-size
   // distance textures front, back, third, fourth (pipelines/single/single_upsample.cpp); `inside`:
-  // the eye is inside the object (KeptMesh::eye_inside).
+  // the eye is inside the object (KeptMesh::eye_inside); `per_ray`: the splat took the phase per
+  // view ray, so the interpolation divides it out too (shaders/single/upsample.frag).
   Image upsample(const RenderTarget& splat, std::array<const RenderTarget*, 4> surfaces, int stride,
-                 bool clip_back, bool inside);
+                 bool clip_back, bool inside, const Scene& scene, bool per_ray);
 
   gpu::Gpu& gpu_;
   BakeCache* cache_;

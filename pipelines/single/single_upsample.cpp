@@ -9,7 +9,7 @@ namespace scatter {
 
 Image SinglePipeline::upsample(const RenderTarget& splat,
                                std::array<const RenderTarget*, 4> surfaces, int stride,
-                               bool clip_back, bool inside) {
+                               bool clip_back, bool inside, const Scene& scene, bool per_ray) {
   if (!upsample_program_)
     upsample_program_ =
         gpu::build_program("shaders/common/fullscreen.vert", "shaders/single/upsample.frag");
@@ -29,6 +29,10 @@ Image SinglePipeline::upsample(const RenderTarget& splat,
   glProgramUniform1f(up, glGetUniformLocation(up, "sigma_t"), float(current_.sigma_t_median));
   glProgramUniform1f(up, glGetUniformLocation(up, "depth_scale"),
                      float(4 * std::max(current_.sigma_median, 1e-6)));
+  uniform1i(up, "phase_guide", per_ray ? 1 : 0);
+  glProgramUniform1f(up, glGetUniformLocation(up, "g"), float(scene.medium.g));
+  set_light_uniforms(up, scene.lights);
+  set_camera_uniforms(up, scene);
   full.bind_and_clear(Vec3{});
   glDisable(GL_DEPTH_TEST);
   glUseProgram(up);
