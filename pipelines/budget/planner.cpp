@@ -154,6 +154,7 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
   // The reference meets any budget.
   BudgetChoice ref;
   ref.cls = best.cls;
+  double drawn_spp = 0;  // the sampled reference's expected samples (below)
   if (terms == Terms::Single) {
     // The single term's reference is the marcher at its finest quality.
     ref.way = Way::parse("reference:high", terms);
@@ -193,10 +194,15 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     ref.settings.push_back(s);
     ref.expected_error = max_error;
     ref.expected_seconds = 0;
+    // The samples it is expected to draw: the path tracer goes on past spp, up to 8x, until its
+    // standard error meets the budget (pipelines/reference/reference_pipeline.cpp), so a request's
+    // spp below the expected count is not what it costs.
+    drawn_spp = std::min<double>(ref.expected_spp, 8 * s["spp"]);
     for (size_t i = 0; i < ref.way.parts.size(); ++i) {
       bool unused = false;
-      ref.expected_seconds +=
-          part_seconds(scene, ref.way.parts[i], ref.settings[i], baked, &unused);
+      Settings at = ref.settings[i];
+      if (i + 1 == ref.way.parts.size()) at["spp"] = drawn_spp;
+      ref.expected_seconds += part_seconds(scene, ref.way.parts[i], at, baked, &unused);
     }
     ref.reason = ref.way.id() + ": the path tracer" +
                  (terms == Terms::All ? " (plus the marched single term)" : "") +
@@ -210,7 +216,7 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     BudgetChoice c = ref;
     Settings& s = c.settings.back();
     bool unused = false;
-    double at_spp = ref.expected_seconds, spp = s["spp"];
+    double at_spp = ref.expected_seconds, spp = drawn_spp;
     s["spp"] = 12;
     double at_12 = 0;
     for (size_t i = 0; i < c.way.parts.size(); ++i)

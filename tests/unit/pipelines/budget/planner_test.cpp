@@ -230,6 +230,23 @@ TEST(Planner, ASoftBudgetTakesTheMostAccurateWayWithinItsTime) {
   }
 }
 
+// The sampled reference goes on past the request's spp, up to 8x, until its standard error
+// meets the budget: its expected time is of the samples it is expected to draw, not of a spp
+// set below them (the long stress mode's mixed/70 was planned at its 6 spp and drew 48).
+TEST(Planner, TheSampledReferenceCountsTheSamplesItWillDraw) {
+  Scene s = sphere_scene(0.9, 8, 0, 64);
+  BudgetChoice needs = plan_budget(s, Terms::Multiple, Budget{0.01}, {}, table());
+  ASSERT_TRUE(needs.sampled);
+  ASSERT_GT(needs.expected_spp, 8 * 12);
+  BudgetChoice low = plan_budget(s, Terms::Multiple, Budget{0.01}, {{"spp", 12}}, table());
+  ASSERT_TRUE(low.sampled);
+  ASSERT_EQ(low.way.id(), "reference:sampled");
+  EXPECT_EQ(low.settings.back().at("spp"), 12);
+  const double at_96 =
+      estimate_cost("reference", s, {Terms::Multiple, {{"spp", 96}}, nullptr}).seconds;
+  EXPECT_NEAR(low.expected_seconds, at_96, 0.01 * at_96);
+}
+
 TEST(Planner, TheSingleTermsReferenceIsTheMarcher) {
   BudgetChoice c = plan_budget(sphere_scene(0.9, 4, 0), Terms::Single, Budget{1e-4}, {}, table());
   EXPECT_EQ(c.way.id(), "reference:high");
