@@ -74,12 +74,24 @@ RenderResult AutoPipeline::render(const Scene& scene, const RenderRequest& reque
   BudgetChoice c = choose(scene, request, baked_in_cache(scene));
   Plan plan = describe(scene, request, c);
   RenderResult out;
+  size_t cursor = 0;  // plan.stages: where the next part's stages may start
   for (size_t i = 0; i < c.way.parts.size(); ++i) {
     RenderResult r = delegate(c.way.parts[i].pipeline).render(scene, part_request(c, i, request));
+    const std::string prefix = c.way.parts.size() == 2 ? c.way.parts[i].pipeline + "." : "";
     for (StageTime t : r.timings) {
-      if (c.way.parts.size() == 2) t.stage = c.way.parts[i].pipeline + "." + t.stage;
+      t.stage = prefix + t.stage;
       out.timings.push_back(std::move(t));
     }
+    // What the part found while rendering (the path tracer: the samples it drew and its
+    // standard error) replaces what it planned; the parts' stages come in order.
+    for (const StagePlan& s : r.plan.stages)
+      for (size_t k = cursor; k < plan.stages.size(); ++k)
+        if (plan.stages[k].name == prefix + s.name) {
+          plan.stages[k].run = s.run;
+          plan.stages[k].reason = s.reason;
+          cursor = k + 1;
+          break;
+        }
     if (i == 0) {
       out.image = std::move(r.image);
       out.std_error = std::move(r.std_error);

@@ -181,7 +181,7 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
       how = "noise " + short_number(noise->value) + "/sqrt(spp) (" + noise->note + ")";
     } else {
       ref.expected_spp = 256;
-      how = "its noise is not calibrated for this kind of medium: 256 spp expected";
+      how = "noise, not calibrated for this kind of medium (256 spp expected)";
     }
     Settings user = AutoPipeline::settings_for("reference", request);
     Settings s = user;
@@ -201,7 +201,10 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     for (size_t i = 0; i < ref.way.parts.size(); ++i) {
       bool unused = false;
       Settings at = ref.settings[i];
-      if (i + 1 == ref.way.parts.size()) at["spp"] = drawn_spp;
+      if (i + 1 == ref.way.parts.size()) {
+        at["spp"] = drawn_spp;
+        at.erase("max_seconds");  // the time the samples need (a max_seconds cuts them short)
+      }
       ref.expected_seconds += part_seconds(scene, ref.way.parts[i], at, baked, &unused);
     }
     ref.reason = ref.way.id() + ": the path tracer" +
@@ -219,8 +222,11 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     double at_spp = ref.expected_seconds, spp = drawn_spp;
     s["spp"] = 12;
     double at_12 = 0;
-    for (size_t i = 0; i < c.way.parts.size(); ++i)
-      at_12 += part_seconds(scene, c.way.parts[i], c.settings[i], baked, &unused);
+    for (size_t i = 0; i < c.way.parts.size(); ++i) {
+      Settings at = c.settings[i];
+      at.erase("max_seconds");
+      at_12 += part_seconds(scene, c.way.parts[i], at, baked, &unused);
+    }
     double per_sample = (at_spp - at_12) / std::max(1.0, spp - 12);
     double fit = per_sample > 0 ? 12 + (budget.soft_seconds - at_12) / per_sample : spp;
     int n = static_cast<int>(std::floor(fit / 12) * 12);
@@ -233,6 +239,24 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
       c.reason = c.way.id() + ": the path tracer at " + std::to_string(n) + " spp, what fits " +
                  seconds(budget.soft_seconds) + ": expected " + percent(c.expected_error);
       capped = std::move(c);
+    }
+  }
+  // A soft budget's path tracer stops sampling at its time, whatever its estimate said (the
+  // estimate can be several times low: docs/STRESS.md, mixed/1680): the soft seconds less its
+  // other parts' (at least a quarter of them), or the request's own max_seconds if less.
+  if (budget.soft) {
+    for (BudgetChoice* c : {&ref, capped ? &*capped : nullptr}) {
+      if (!c) continue;
+      double before = 0;
+      for (size_t i = 0; i + 1 < c->way.parts.size(); ++i) {
+        bool unused = false;
+        before += part_seconds(scene, c->way.parts[i], c->settings[i], baked, &unused);
+      }
+      double left = std::max(budget.soft_seconds - before, budget.soft_seconds / 4);
+      Settings& s = c->settings.back();
+      if (s.count("max_seconds") && s["max_seconds"] > 0) left = std::min(left, s["max_seconds"]);
+      s["max_seconds"] = left;
+      c->reason += "; its samples stop at " + seconds(left) + " (max_seconds)";
     }
   }
   consider(std::move(ref));

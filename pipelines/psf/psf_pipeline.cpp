@@ -92,9 +92,12 @@ Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, co
                            : std::to_string(scene.voxels) + " voxels on the long side"});
   const bool multiple = request.terms != Terms::Single;
   const bool thin = thickness < s.thin;
-  int changed = 0;
-  for (const auto& key : light_keys(scene))
-    changed += held && !s.rebuild && medium_.lights.count(key) ? 0 : 1;
+  int changed = 0, new_orders = 0;  // lights whose volume, or whose orders, are to be built
+  for (const auto& key : light_keys(scene)) {
+    const bool kept = held && !s.rebuild && medium_.lights.count(key);
+    changed += kept ? 0 : 1;
+    new_orders += kept && medium_.orders.count(key) ? 0 : 1;
+  }
   const int n = static_cast<int>(scene.lights.size());
   std::string lights = std::to_string(changed) + " of " + std::to_string(n) + " lights";
   p.stages.push_back({"light_volume", changed > 0,
@@ -107,16 +110,18 @@ Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, co
                       : changed     ? lights + ": Gaussian pyramid of the scattered light"
                                     : "every light's pyramid is reused (camera-only change)"});
   const bool orders = need_pyramid && s.model == 1;
+  const std::string order_lights =
+      std::to_string(new_orders) + " of " + std::to_string(n) + " lights";
   p.stages.push_back(
-      {"orders", orders && changed > 0,
+      {"orders", orders && new_orders > 0,
        !need_pyramid ? "the multiple term is not rendered"
        : !orders     ? "model 0 (the paper's): the march reads the pyramid at one path length"
-       : changed     ? lights +
-                       ": the scattering orders on a coarse pyramid level, each spread and "
-                       "drifted by its flight (model 1, orders" +
-                       (s.conserve ? std::string(", each flight's collisions conserved)")
-                                   : std::string(", b capped at the albedo x mean c)"))
-                 : "every light's orders are reused (camera-only change)"});
+       : new_orders  ? order_lights +
+                          ": the scattering orders on a coarse pyramid level, each spread and "
+                          "drifted by its flight (model 1, orders" +
+                          (s.conserve ? std::string(", each flight's collisions conserved)")
+                                      : std::string(", b capped at the albedo x mean c)"))
+                    : "every light's orders are reused (camera-only change)"});
   p.stages.push_back({"march_single", request.terms != Terms::Multiple,
                       request.terms == Terms::Multiple ? "single term not requested"
                                                        : "sub-steps of " + short_number(s.step) +

@@ -42,7 +42,11 @@ const SettingsTable<ReferenceSettings>& reference_settings() {
                             "stratified (padded Owen-scrambled Sobol), batches are independent "
                             "and the standard error comes from their spread; 1: independent "
                             "samples; 0: the largest power of two up to 16 that leaves 32 "
-                            "batches")});
+                            "batches"),
+                    setting("max_seconds", &ReferenceSettings::max_seconds, 0, 86400, frame(),
+                            "the path tracer's time for its samples, in seconds: past it no "
+                            "pass starts, and the image is the mean of the samples drawn (at "
+                            "least one), its standard error theirs; 0: no limit")});
   return table;
 }
 

@@ -1,6 +1,7 @@
 #include "pipelines/reference/reference_pipeline.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "core/errors.hpp"
@@ -130,7 +131,10 @@ Plan ReferencePipeline::describe(const Scene& scene, Terms terms,
     p.stages.push_back({"march", false, "Monte Carlo estimates this term"});
     p.stages.push_back({"trace", true,
                         std::to_string(s.spp) + " samples per pixel, " +
-                            (terms == Terms::Single ? "first vertex only" : "all orders")});
+                            (terms == Terms::Single ? "first vertex only" : "all orders") +
+                            (s.max_seconds > 0 ? ", or as many as " + short_number(s.max_seconds) +
+                                                     " s allow (max_seconds)"
+                                               : "")});
   }
   p.stages.push_back({"readback", true, "mean and standard error"});
   return p;
@@ -247,7 +251,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   // Progressive passes of a few samples keep each launch short and let callers see progress.
   // With a budget (max_error), spp is the expected count: the passes go on until the relative
   // standard error is under the budget, checked every twelfth of the samples so far (whole
-  // rounds of three), up to 8x spp.
+  // rounds of three), up to 8x spp. With max_seconds no pass starts past it, and a pass takes
+  // only the samples expected to fit what is left (the first pass one sample, to time it).
   const int per_pass = std::min(s.spp, 4);
   const int cap = request.max_error ? std::min(8 * s.spp, 1 << 20) : s.spp;
   const double sq_scale = square_scale(scene);
@@ -263,10 +268,29 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     finish_estimate(host, spp, batch, sq_scale, result.image, *result.std_error);
     return relative_norm(*result.std_error, result.image);
   };
+  const auto trace_start = std::chrono::steady_clock::now();
+  auto traced_seconds = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - trace_start).count();
+  };
   int spp = 0, next_check = 12;
+  bool out_of_time = false;
   std::optional<double> noise;
   for (int done = 0; done < cap; done += per_pass) {
     int n = std::min(per_pass, cap - done);
+    if (s.max_seconds > 0) {
+      // Time a sample, then take what fits; stop once not even half a sample does, but not
+      // before three samples (spp's least: fewer give no standard error to speak of).
+      const int least = std::min(3, cap);
+      double used = traced_seconds(), per_sample = done > 0 ? used / done : 0;
+      if (done >= least && used + 0.5 * per_sample >= s.max_seconds) {
+        out_of_time = true;
+        break;
+      }
+      int fit = done == 0 ? 1
+                          : std::clamp(int((s.max_seconds - used) / std::max(per_sample, 1e-9)),
+                                       std::max(1, least - done), n);
+      n = std::min(fit, per_pass - done % per_pass);  // passes still end on multiples of per_pass
+    }
     gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz,
                   medium.bricks.brick, medium.bricks.bx, medium.bricks.by, medium.bricks.bz,
                   medium.sigma_s, medium.sigma_t, medium.majorant, uniform_buf, homogeneous, lights,
@@ -278,7 +302,11 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     queue.enqueueNDRangeKernel(k, cl::NullRange, global);
     queue.finish();
     spp = done + n;
-    if (request.progress) request.progress(double(spp) / cap);
+    done = spp - per_pass;  // the loop adds per_pass back
+    if (request.progress)
+      request.progress(std::min(
+          1.0,
+          std::max(double(spp) / cap, s.max_seconds > 0 ? traced_seconds() / s.max_seconds : 0.0)));
     if (request.max_error && spp >= next_check && spp % 12 == 0) {
       noise = noise_now(spp);
       if (*noise <= *request.max_error) break;
@@ -292,8 +320,16 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     plan_stage(result.plan, "trace").reason =
         std::to_string(spp) + " samples per pixel: relative standard error " +
         short_number(100 * *noise) + " % " +
-        (*noise <= *request.max_error ? "under" : "still over, at 8x the expected samples,") +
+        (*noise <= *request.max_error
+             ? "under"
+             : (out_of_time ? "still over, at max_seconds " + short_number(s.max_seconds) + " s,"
+                            : "still over, at 8x the expected samples,")) +
         " the budget of " + short_number(100 * *request.max_error) + " %";
+  } else if (out_of_time) {
+    plan_stage(result.plan, "trace").reason =
+        std::to_string(spp) + " of " + std::to_string(s.spp) + " samples per pixel, what " +
+        short_number(s.max_seconds) + " s allowed (max_seconds): relative standard error " +
+        short_number(100 * *noise) + " %";
   }
   clock.stop("readback");
   return result;

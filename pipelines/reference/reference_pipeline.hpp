@@ -30,6 +30,7 @@ struct ReferenceSettings {
   bool exit_maps = true;    // shadow rays leave a convex mesh through maps of its light-facing side
   bool homogeneous = true;  // a constant medium inside the mesh is tracked without walks
   int batch = 0;  // samples per stratified batch (kernels/reference/path.cl); 0: batch_for(spp)
+  double max_seconds = 0;  // > 0: the path tracer stops sampling once its passes took this long
   static ReferenceSettings read(const Settings& settings);
   // The single term by the deterministic marcher (not mc).
   bool marches(Terms terms) const { return terms == Terms::Single && !mc; }

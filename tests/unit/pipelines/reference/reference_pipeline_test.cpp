@@ -352,6 +352,44 @@ TEST(ReferencePipeline, SameSeedRepeats) {
   EXPECT_NE(a.image.rgb, c.image.rgb);
 }
 
+// max_seconds stops the path tracer's passes: far fewer samples than asked (a million would take
+// hours), at least three, the plan says how many, and the image is their mean: the same as a
+// render of just those samples (the same seed and batches; the passes add in another order).
+// Its cost estimate stops there too, naming the setting.
+TEST(ReferencePipeline, MaxSecondsStopsThePassesAtTheSamplesDrawn) {
+  Scene s = small_scene("sphere", 16, 16);
+  const Settings stopped{{"spp", 1 << 20}, {"max_seconds", 0.3}, {"seed", 3}, {"batch", 4}};
+  RenderResult r = reference_render(s, Terms::Multiple, stopped);
+  const std::string reason = plan_stage(r.plan, "trace").reason;
+  const std::string of = " of " + std::to_string(1 << 20) + " samples per pixel";
+  ASSERT_NE(reason.find(of), std::string::npos) << reason;
+  EXPECT_NE(reason.find("max_seconds"), std::string::npos) << reason;
+  const int drawn = std::stoi(reason.substr(0, reason.find(of)));
+  EXPECT_GE(drawn, 3);
+  EXPECT_LT(drawn, 1 << 20);
+  RenderResult same =
+      reference_render(s, Terms::Multiple, {{"spp", drawn}, {"seed", 3}, {"batch", 4}});
+  ASSERT_EQ(same.image.rgb.size(), r.image.rgb.size());
+  for (size_t i = 0; i < r.image.rgb.size(); ++i) {
+    EXPECT_NEAR(r.image.rgb[i], same.image.rgb[i], 1e-5 * (1 + std::abs(same.image.rgb[i])));
+    EXPECT_NEAR(r.std_error->rgb[i], same.std_error->rgb[i],
+                1e-4 * (1 + std::abs(same.std_error->rgb[i])));
+  }
+  ASSERT_TRUE(r.error_estimate);
+  EXPECT_GT(*r.error_estimate, 0);
+
+  // The estimate: the upload, then at most one sample past max_seconds.
+  auto estimate = [&](Settings set) {
+    return ReferencePipeline::estimate(s, {Terms::Multiple, std::move(set), {}}, false);
+  };
+  const CostEstimate all = estimate({{"spp", 1 << 20}}), three = estimate({{"spp", 3}});
+  const CostEstimate cut = estimate({{"spp", 1 << 20}, {"max_seconds", 5}});
+  const double per_sample = (all.seconds - three.seconds) / ((1 << 20) - 3);
+  EXPECT_EQ(all.time_field, "settings.spp");
+  EXPECT_EQ(cut.time_field, "settings.max_seconds");
+  EXPECT_NEAR(cut.seconds, three.seconds - 3 * per_sample + 5 + per_sample, 1e-6);
+}
+
 // The mesh queries through the voxels' triangle lists (cells=1) find the BVH's hits
 // (CellTriangles.KernelHitsMatchTheBvh), so with the same seed the paths are the same: the two
 // images differ by float rounding where a path's crossing lands within it of a collision, far
