@@ -42,14 +42,15 @@ RenderRequest AutoPipeline::part_request(const BudgetChoice& c, size_t part,
   return p;
 }
 
-Plan AutoPipeline::describe(const Scene& scene, const RenderRequest& request,
-                            const BudgetChoice& c) {
+Plan AutoPipeline::describe(const Scene& scene, const RenderRequest& request, const BudgetChoice& c,
+                            std::vector<size_t>* starts) {
   Plan p{name() + " -> " + c.way.id(), request.terms, {{"choose", true, c.reason}}};
   if (c.way.parts.size() == 2)
     p.stages.push_back({"composite", true,
                         "the single term from " + c.way.parts[0].pipeline +
                             " plus the multiple term from " + c.way.parts[1].pipeline});
   for (size_t i = 0; i < c.way.parts.size(); ++i) {
+    if (starts) starts->push_back(p.stages.size());
     Plan inner = delegate(c.way.parts[i].pipeline).plan(scene, part_request(c, i, request));
     for (StagePlan s : inner.stages) {
       if (c.way.parts.size() == 2) s.name = c.way.parts[i].pipeline + "." + s.name;
@@ -72,9 +73,10 @@ RenderResult AutoPipeline::render(const Scene& scene, const RenderRequest& reque
   require_terms(*this, request.terms);
   info().validate(request.settings);
   BudgetChoice c = choose(scene, request, baked_in_cache(scene));
-  Plan plan = describe(scene, request, c);
+  std::vector<size_t> starts;  // where each part's stages begin in plan.stages
+  Plan plan = describe(scene, request, c, &starts);
+  starts.push_back(plan.stages.size());
   RenderResult out;
-  size_t cursor = 0;  // plan.stages: where the next part's stages may start
   for (size_t i = 0; i < c.way.parts.size(); ++i) {
     RenderResult r = delegate(c.way.parts[i].pipeline).render(scene, part_request(c, i, request));
     const std::string prefix = c.way.parts.size() == 2 ? c.way.parts[i].pipeline + "." : "";
@@ -83,13 +85,12 @@ RenderResult AutoPipeline::render(const Scene& scene, const RenderRequest& reque
       out.timings.push_back(std::move(t));
     }
     // What the part found while rendering (the path tracer: the samples it drew and its
-    // standard error) replaces what it planned; the parts' stages come in order.
+    // standard error) replaces what it planned, among its own stages.
     for (const StagePlan& s : r.plan.stages)
-      for (size_t k = cursor; k < plan.stages.size(); ++k)
+      for (size_t k = starts[i]; k < starts[i + 1]; ++k)
         if (plan.stages[k].name == prefix + s.name) {
           plan.stages[k].run = s.run;
           plan.stages[k].reason = s.reason;
-          cursor = k + 1;
           break;
         }
     if (i == 0) {

@@ -39,7 +39,9 @@ class AutoPipeline : public Pipeline {
   Pipeline& delegate(const std::string& name);
   // The request a part of the chosen way gets.
   static RenderRequest part_request(const BudgetChoice& c, size_t part, const RenderRequest& r);
-  Plan describe(const Scene& scene, const RenderRequest& request, const BudgetChoice& c);
+  // The plan of choice c; `starts`, when given, gets where each part's stages begin in it.
+  Plan describe(const Scene& scene, const RenderRequest& request, const BudgetChoice& c,
+                std::vector<size_t>* starts = nullptr);
   // By the cache's keys, and what the delegates keep (Pipeline::keeps).
   IsBaked baked_in_cache(const Scene& scene);
 

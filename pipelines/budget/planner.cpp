@@ -243,16 +243,36 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
   }
   // A soft budget's path tracer stops sampling at its time, whatever its estimate said (the
   // estimate can be several times low: docs/STRESS.md, mixed/1680): the soft seconds less its
-  // other parts' (at least a quarter of them), or the request's own max_seconds if less.
-  if (budget.soft) {
+  // other parts' and its own upload (at least a quarter of them), or the request's own
+  // max_seconds if less. The path tracer's seconds at `spp` samples, without max_seconds:
+  auto tracer_seconds = [&](const BudgetChoice& c, double spp) {
+    Settings at = c.settings.back();
+    at.erase("max_seconds");
+    at["spp"] = spp;
+    bool unused = false;
+    return part_seconds(scene, c.way.parts.back(), at, baked, &unused);
+  };
+  auto before_seconds = [&](const BudgetChoice& c) {  // its other parts'
+    double before = 0;
+    for (size_t i = 0; i + 1 < c.way.parts.size(); ++i) {
+      bool unused = false;
+      before += part_seconds(scene, c.way.parts[i], c.settings[i], baked, &unused);
+    }
+    return before;
+  };
+  auto per_sample = [&](const BudgetChoice& c) {
+    return (tracer_seconds(c, 99) - tracer_seconds(c, 3)) / 96;
+  };
+  auto upload_seconds = [&](const BudgetChoice& c) {
+    return std::max(0.0, tracer_seconds(c, 3) - 3 * per_sample(c));
+  };
+  const int needed_spp = ref.expected_spp;
+  const bool tracer = ref.sampled;  // ref is moved into the choice below
+  if (budget.soft && tracer) {
     for (BudgetChoice* c : {&ref, capped ? &*capped : nullptr}) {
       if (!c) continue;
-      double before = 0;
-      for (size_t i = 0; i + 1 < c->way.parts.size(); ++i) {
-        bool unused = false;
-        before += part_seconds(scene, c->way.parts[i], c->settings[i], baked, &unused);
-      }
-      double left = std::max(budget.soft_seconds - before, budget.soft_seconds / 4);
+      double left = std::max(budget.soft_seconds - before_seconds(*c) - upload_seconds(*c),
+                             budget.soft_seconds / 4);
       Settings& s = c->settings.back();
       if (s.count("max_seconds") && s["max_seconds"] > 0) left = std::min(left, s["max_seconds"]);
       s["max_seconds"] = left;
@@ -290,6 +310,20 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     }
   }
   if (capped) others.push_back(std::move(*capped));
+  // A path tracer whose max_seconds cuts its samples short (none quicker was found): the
+  // samples expected to fit, their error and time.
+  if (budget.soft && tracer && best.settings.back().count("max_seconds") &&
+      best.way.parts.back().pipeline == "reference" && needed_spp > 0) {
+    const double per = per_sample(best), left = best.settings.back().at("max_seconds");
+    const double planned = best.sampled ? drawn_spp : best.expected_spp;
+    const double fit = per > 0 ? std::max(3.0, std::floor(left / per)) : planned;
+    if (fit < planned) {
+      best.expected_error = max_error * std::sqrt(needed_spp / fit) / std::sqrt(1.2);
+      best.expected_seconds = before_seconds(best) + upload_seconds(best) + left;
+      best.reason += ": about " + std::to_string(int(fit)) + " samples fit, expected " +
+                     percent(best.expected_error) + " in " + seconds(best.expected_seconds);
+    }
+  }
 
   for (const BudgetChoice& c : others)
     best.alternatives.push_back({c.way.id(), c.settings.size() == 1 ? c.settings[0] : Settings{},

@@ -84,6 +84,27 @@ void PsfPipeline::check_memory(const Scene& scene) {
             " (largest buffer " + mib(double(info.max_alloc)) + "): use fewer voxels or lights");
 }
 
+psf::OrderParams PsfPipeline::order_params(const Scene& scene, const PsfSettings& s) const {
+  return {.g = scene.medium.g,
+          .mean_sigma_t = medium_.mean_sigma_t,
+          .level = s.level,
+          .flights = s.flights,
+          .drift = s.drift >= 0 ? s.drift : psf::calibrated_drift(scene.medium.g),
+          .tail = s.tail,
+          .conserve = s.conserve};
+}
+
+bool PsfPipeline::orders_held(const std::string& key, const psf::OrderParams& op) const {
+  auto v = medium_.lights.find(key);
+  auto it = medium_.orders.find(key);
+  if (!medium_.cl || v == medium_.lights.end() || it == medium_.orders.end()) return false;
+  const int level =
+      psf::orders_level(op, medium_.cl->voxel, static_cast<int>(v->second.pyramid.layout.size()));
+  return it->second.level == level && it->second.flights == op.flights &&
+         it->second.tail == op.tail && it->second.drift == op.drift &&
+         it->second.conserve == op.conserve;
+}
+
 Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, const PsfSettings& s,
                             bool held, double thickness, const std::string& thickness_note) const {
   Plan p{name(), request.terms, {}};
@@ -96,7 +117,7 @@ Plan PsfPipeline::make_plan(const Scene& scene, const RenderRequest& request, co
   for (const auto& key : light_keys(scene)) {
     const bool kept = held && !s.rebuild && medium_.lights.count(key);
     changed += kept ? 0 : 1;
-    new_orders += kept && medium_.orders.count(key) ? 0 : 1;
+    new_orders += kept && orders_held(key, order_params(scene, s)) ? 0 : 1;
   }
   const int n = static_cast<int>(scene.lights.size());
   std::string lights = std::to_string(changed) + " of " + std::to_string(n) + " lights";
@@ -210,21 +231,10 @@ RenderResult PsfPipeline::render(const Scene& scene, const RenderRequest& reques
   const bool thin_medium = thickness_ < s.thin;
   double orders_ms = 0;
   if (s.model == 1 && request.terms != Terms::Single && !thin_medium) {
-    psf::OrderParams op{.g = scene.medium.g,
-                        .mean_sigma_t = medium_.mean_sigma_t,
-                        .level = s.level,
-                        .flights = s.flights,
-                        .drift = s.drift >= 0 ? s.drift : psf::calibrated_drift(scene.medium.g),
-                        .tail = s.tail,
-                        .conserve = s.conserve};
+    const psf::OrderParams op = order_params(scene, s);
     for (size_t i = 0; i < keys.size(); ++i) {
       const psf::LightVolume& v = medium_.lights.at(keys[i]);
-      const int level = psf::orders_level(op, m.voxel, static_cast<int>(v.pyramid.layout.size()));
-      auto it = medium_.orders.find(keys[i]);
-      if (it != medium_.orders.end() && it->second.level == level &&
-          it->second.flights == s.flights && it->second.tail == s.tail &&
-          it->second.drift == op.drift && it->second.conserve == s.conserve)
-        continue;
+      if (orders_held(keys[i], op)) continue;
       psf::Orders o =
           psf::build_orders(cl, m, medium_.occupancy, v.pyramid, lights, static_cast<int>(i), op);
       orders_ms += o.ms;

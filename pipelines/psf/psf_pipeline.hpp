@@ -77,6 +77,10 @@ class PsfPipeline : public Pipeline {
   // thickness (`note` says how that was known).
   Plan make_plan(const Scene& scene, const RenderRequest& request, const PsfSettings& s, bool held,
                  double thickness, const std::string& note) const;
+  // Model 1's parameters for the held medium, and whether the orders held for light `key` were
+  // built with them (else render() builds them again).
+  psf::OrderParams order_params(const Scene& scene, const PsfSettings& s) const;
+  bool orders_held(const std::string& key, const psf::OrderParams& op) const;
 
   gpu::Gpu& gpu_;
   Medium medium_;

@@ -95,7 +95,7 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
     // flights end inside a voxel and shadow rays sum voxel by voxel, each starting a walk of
     // its bricks. Measured (2026-12-07, 24^2 px, 16 voxels, paths of max_depth 1024, a 2-core
     // CPU, per vertex): noise at sigma_t x voxel 10 0.72 us with 1 light, 6.0 with 16; a one-voxel
-    // grid shell at 1000 0.58 and 4.2 (no mesh; its mesh doubles the 1 light's); the same box
+    // grid shell at 1000 0.58 and 4.1 (no mesh; its mesh doubles the 1 light's); the same box
     // at a constant density 0.28: a unit 2.6x as long, a light as long as a vertex.
     const bool varies = scene.medium.density && !scene.medium.density->homogeneous();
     const double dense = varies ? std::clamp(m.mean_sigma_t * g.voxel, 0.0, 1.0) : 0;
@@ -106,10 +106,13 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
     std::string what = std::to_string(int(covered)) + " covered px x " + std::to_string(s.spp) +
                        " spp x " + short_number(1 + events) + " vertices x " +
                        std::to_string(int(lights)) + " lights";
-    // max_seconds stops the passes: past it at most one sample's time.
-    const bool stopped = s.max_seconds > 0 && seconds > s.max_seconds + seconds / s.spp;
+    // max_seconds stops the passes: past it at most one sample's time, and never before three
+    // samples.
+    const double per = seconds / s.spp;
+    const double until = std::max(s.max_seconds + per, std::min(s.spp, 3) * per);
+    const bool stopped = s.max_seconds > 0 && seconds > until;
     if (stopped) {
-      seconds = s.max_seconds + seconds / s.spp;
+      seconds = until;
       what += ", stopped at max_seconds " + short_number(s.max_seconds) + " s";
     }
     frame.time(stopped ? "settings.max_seconds" : "settings.spp", seconds, what);

@@ -44,9 +44,10 @@ const SettingsTable<ReferenceSettings>& reference_settings() {
                             "samples; 0: the largest power of two up to 16 that leaves 32 "
                             "batches"),
                     setting("max_seconds", &ReferenceSettings::max_seconds, 0, 86400, frame(),
-                            "the path tracer's time for its samples, in seconds: past it no "
-                            "pass starts, and the image is the mean of the samples drawn (at "
-                            "least one), its standard error theirs; 0: no limit")});
+                            "the path tracer's time for its samples (the trace stage), in "
+                            "seconds: no pass starts once not even half a sample fits in what "
+                            "is left, never before three samples; the image is the mean of the "
+                            "samples drawn, its standard error theirs; 0: no limit")});
   return table;
 }
 

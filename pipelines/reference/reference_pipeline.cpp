@@ -287,8 +287,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
         break;
       }
       int fit = done == 0 ? 1
-                          : std::clamp(int((s.max_seconds - used) / std::max(per_sample, 1e-9)),
-                                       std::max(1, least - done), n);
+                          : int(std::clamp((s.max_seconds - used) / std::max(per_sample, 1e-9),
+                                           double(std::max(1, least - done)), double(n)));
       n = std::min(fit, per_pass - done % per_pass);  // passes still end on multiples of per_pass
     }
     gpu::set_args(k, medium.origin, medium.voxel, medium.nx, medium.ny, medium.nz,

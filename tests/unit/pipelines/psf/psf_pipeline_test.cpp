@@ -191,6 +191,27 @@ TEST(PsfPipeline, KeepsLightVolumesAcrossCameraMovesAndRebuildsOnlyMovedLights) 
   for (size_t i = 0; i < again.rgb.size(); ++i) ASSERT_FLOAT_EQ(again.rgb[i], third.image.rgb[i]);
 }
 
+// The plan's orders stage says what render() does with model 1's orders: built for a light that
+// has a volume but no orders yet (a single-term frame first), reused for a camera-only change,
+// built again when an order setting changed.
+TEST(PsfPipeline, ThePlanSaysWhenTheOrdersAreBuilt) {
+  Scene s = small_sphere();
+  PsfPipeline p(test::shared_gpu());
+  auto orders = [](const RenderResult& r) {
+    for (const StagePlan& st : r.plan.stages)
+      if (st.name == "orders") return st;
+    return StagePlan{};
+  };
+  p.render(s, {Terms::Single, {}});  // the light's volume, no orders
+  StagePlan first = orders(p.render(s, {Terms::Multiple, {}}));
+  EXPECT_TRUE(first.run) << first.reason;
+  EXPECT_NE(first.reason.find("1 of 1 lights"), std::string::npos) << first.reason;
+  StagePlan kept = orders(p.render(s, {Terms::Multiple, {}}));
+  EXPECT_FALSE(kept.run) << kept.reason;
+  StagePlan other = orders(p.render(s, {Terms::Multiple, {{"flights", 1}}}));
+  EXPECT_TRUE(other.run) << other.reason;
+}
+
 TEST(PsfPipeline, SpotLightsLightOnlyInsideTheirCone) {
   Scene s = small_sphere();
   Light spot;
