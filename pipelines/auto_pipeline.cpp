@@ -1,5 +1,6 @@
 #include "pipelines/auto_pipeline.hpp"
 
+#include <chrono>
 #include <cmath>
 
 #include "bake/cache.hpp"
@@ -37,8 +38,11 @@ IsBaked AutoPipeline::baked_in_cache(const Scene& scene) {
 RenderRequest AutoPipeline::part_request(const BudgetChoice& c, size_t part,
                                          const RenderRequest& r) {
   RenderRequest p{c.way.parts[part].terms, c.settings[part], r.progress};
-  if (c.sampled && part + 1 == c.way.parts.size())
+  if (c.sampled && part + 1 == c.way.parts.size()) {
     p.max_error = r.max_error.value_or(kDefaultMaxError);
+    p.soft_budget = !r.max_error;
+  }
+  p.time_limit_s = r.time_limit_s;  // render() takes off what the parts before took
   return p;
 }
 
@@ -77,8 +81,15 @@ RenderResult AutoPipeline::render(const Scene& scene, const RenderRequest& reque
   Plan plan = describe(scene, request, c, &starts);
   starts.push_back(plan.stages.size());
   RenderResult out;
+  const auto start = std::chrono::steady_clock::now();
   for (size_t i = 0; i < c.way.parts.size(); ++i) {
-    RenderResult r = delegate(c.way.parts[i].pipeline).render(scene, part_request(c, i, request));
+    RenderRequest part = part_request(c, i, request);
+    if (part.time_limit_s > 0)
+      part.time_limit_s = std::max(
+          1e-3,
+          part.time_limit_s -
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    RenderResult r = delegate(c.way.parts[i].pipeline).render(scene, part);
     const std::string prefix = c.way.parts.size() == 2 ? c.way.parts[i].pipeline + "." : "";
     for (StageTime t : r.timings) {
       t.stage = prefix + t.stage;

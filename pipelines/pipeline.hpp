@@ -69,6 +69,13 @@ struct RenderRequest {
   // The error the caller accepts (relative RMSE against the reference of `terms`, e.g. 0.05):
   // auto plans by it, the reference takes as many samples as it needs; other pipelines reject it.
   std::optional<double> max_error;
+  // max_error is auto's own aim (none was asked for), not the caller's: the path tracer samples
+  // towards it only as far as the calibrated count, 8x (no further on its measured error).
+  bool soft_budget = false;
+  // > 0: the caller cancels the render this many seconds after render() begins (the daemon's
+  // --max-render-s); work that can stop early (the path tracer's passes) stops in time to
+  // return what it has.
+  double time_limit_s = 0;
 };
 
 struct RenderResult {

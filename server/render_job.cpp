@@ -27,6 +27,7 @@ RenderResult render_frame(RenderQueue::Context& c, Metrics& metrics, const Frame
   RenderRequest req;
   req.settings = spec.settings;
   req.max_error = spec.max_error;
+  req.time_limit_s = spec.max_seconds;  // the path tracer stops in time to return its samples
   auto ok = p.supported_terms();
   req.terms = !spec.terms.empty()                                       ? parse_terms(spec.terms)
               : std::find(ok.begin(), ok.end(), Terms::All) != ok.end() ? Terms::All

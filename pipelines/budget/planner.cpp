@@ -194,9 +194,10 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     ref.settings.push_back(s);
     ref.expected_error = max_error;
     ref.expected_seconds = 0;
-    // The samples it is expected to draw: the path tracer goes on past spp, up to 8x, until its
-    // standard error meets the budget (pipelines/reference/reference_pipeline.cpp), so a request's
-    // spp below the expected count is not what it costs.
+    // The samples it is expected to draw: the path tracer goes on past spp, up to 8x (more only
+    // where its measured standard error says the calibrated noise was low), until its standard
+    // error meets the budget (pipelines/reference/reference_pipeline.cpp), so a request's spp
+    // below the expected count is not what it costs.
     drawn_spp = std::min<double>(ref.expected_spp, 8 * s["spp"]);
     for (size_t i = 0; i < ref.way.parts.size(); ++i) {
       bool unused = false;

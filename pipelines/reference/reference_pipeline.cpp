@@ -141,6 +141,7 @@ Plan ReferencePipeline::describe(const Scene& scene, Terms terms,
 }
 
 RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& request) {
+  const auto render_start = std::chrono::steady_clock::now();
   RenderResult result;
   require_terms(*this, request.terms);
   const ReferenceSettings s = ReferenceSettings::read(request.settings);  // once a frame
@@ -251,10 +252,14 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   // Progressive passes of a few samples keep each launch short and let callers see progress.
   // With a budget (max_error), spp is the expected count: the passes go on until the relative
   // standard error is under the budget, checked every twelfth of the samples so far (whole
-  // rounds of three), up to 8x spp. With max_seconds no pass starts past it, and a pass takes
-  // only the samples expected to fit what is left (the first pass one sample, to time it).
+  // rounds of three), up to 8x spp, or, for a budget the caller asked for (not auto's soft
+  // one), as many more as the standard error measured then says the budget needs (up to 64x). With
+  // max_seconds, or a time limit (9/10 of it, less what came before the trace), no pass starts once
+  // not even half a sample fits in what is left, and a pass takes only the samples expected to fit
+  // (the first pass one sample, to time it).
   const int per_pass = std::min(s.spp, 4);
-  const int cap = request.max_error ? std::min(8 * s.spp, 1 << 20) : s.spp;
+  int cap = request.max_error ? std::min(8 * s.spp, 1 << 20) : s.spp;
+  const int most = request.max_error && !request.soft_budget ? std::min(64 * s.spp, 1 << 20) : cap;
   const double sq_scale = square_scale(scene);
   const int batch = s.batch > 0 ? s.batch : batch_for(s.spp);
   Sums host{std::vector<float>(floats), std::vector<float>(floats), std::vector<float>(floats),
@@ -272,22 +277,34 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   auto traced_seconds = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - trace_start).count();
   };
+  // The trace's own time: max_seconds, and what the caller's time limit leaves.
+  double trace_limit = s.max_seconds;
+  bool by_time_limit = false;
+  if (request.time_limit_s > 0) {
+    const double before = std::chrono::duration<double>(trace_start - render_start).count();
+    const double left = std::max(1e-3, 0.9 * request.time_limit_s - before);
+    if (trace_limit <= 0 || left < trace_limit) {
+      trace_limit = left;
+      by_time_limit = true;
+    }
+  }
   int spp = 0, next_check = 12;
   bool out_of_time = false;
+  double shown = 0;  // the progress reported so far (the cap may grow)
   std::optional<double> noise;
   for (int done = 0; done < cap; done += per_pass) {
     int n = std::min(per_pass, cap - done);
-    if (s.max_seconds > 0) {
+    if (trace_limit > 0) {
       // Time a sample, then take what fits; stop once not even half a sample does, but not
       // before three samples (spp's least: fewer give no standard error to speak of).
       const int least = std::min(3, cap);
       double used = traced_seconds(), per_sample = done > 0 ? used / done : 0;
-      if (done >= least && used + 0.5 * per_sample >= s.max_seconds) {
+      if (done >= least && used + 0.5 * per_sample >= trace_limit) {
         out_of_time = true;
         break;
       }
       int fit = done == 0 ? 1
-                          : int(std::clamp((s.max_seconds - used) / std::max(per_sample, 1e-9),
+                          : int(std::clamp((trace_limit - used) / std::max(per_sample, 1e-9),
                                            double(std::max(1, least - done)), double(n)));
       n = std::min(fit, per_pass - done % per_pass);  // passes still end on multiples of per_pass
     }
@@ -303,33 +320,45 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     queue.finish();
     spp = done + n;
     done = spp - per_pass;  // the loop adds per_pass back
-    if (request.progress)
-      request.progress(std::min(
-          1.0,
-          std::max(double(spp) / cap, s.max_seconds > 0 ? traced_seconds() / s.max_seconds : 0.0)));
     if (request.max_error && spp >= next_check && spp % 12 == 0) {
       noise = noise_now(spp);
       if (*noise <= *request.max_error) break;
       next_check = spp + std::max(12, spp / 12 / 12 * 12);
+      // What the standard error measured says the budget needs, a tenth to spare.
+      const double need = 1.1 * spp * std::pow(*noise / *request.max_error, 2);
+      if (std::isfinite(need) && need > cap)
+        cap = int(std::min<double>(most, std::ceil(need / 12) * 12));
+    }
+    if (request.progress) {
+      shown = std::max(
+          shown, std::min(1.0, std::max(double(spp) / cap,
+                                        trace_limit > 0 ? traced_seconds() / trace_limit : 0.0)));
+      request.progress(shown);
     }
   }
   clock.stop("trace");
   noise = noise_now(spp);
   result.error_estimate = noise;
+  const std::string stopped_by =
+      !out_of_time    ? ""
+      : by_time_limit ? "the render's time limit (" + short_number(request.time_limit_s) + " s)"
+                      : "max_seconds " + short_number(s.max_seconds) + " s";
   if (request.max_error) {
+    std::string where = out_of_time ? "at " + stopped_by
+                        : spp >= most
+                            ? "at " + std::to_string(most / s.spp) + "x the expected samples" +
+                                  (request.soft_budget ? " (the default budget's most)" : "")
+                            : "at " + std::to_string(cap) + " samples, what its standard error " +
+                                  "said the budget needs";
     plan_stage(result.plan, "trace").reason =
         std::to_string(spp) + " samples per pixel: relative standard error " +
         short_number(100 * *noise) + " % " +
-        (*noise <= *request.max_error
-             ? "under"
-             : (out_of_time ? "still over, at max_seconds " + short_number(s.max_seconds) + " s,"
-                            : "still over, at 8x the expected samples,")) +
+        (*noise <= *request.max_error ? "under" : "still over, " + where + ",") +
         " the budget of " + short_number(100 * *request.max_error) + " %";
   } else if (out_of_time) {
     plan_stage(result.plan, "trace").reason =
         std::to_string(spp) + " of " + std::to_string(s.spp) + " samples per pixel, what " +
-        short_number(s.max_seconds) + " s allowed (max_seconds): relative standard error " +
-        short_number(100 * *noise) + " %";
+        stopped_by + " allowed: relative standard error " + short_number(100 * *noise) + " %";
   }
   clock.stop("readback");
   return result;

@@ -144,7 +144,32 @@ TEST_F(ServiceTest, RendersEstimatedPastTheTimeLimitAreRefused) {
   EXPECT_NE(r.body().find("--max-render-s"), std::string::npos) << r.body();
 }
 
+// A render past --max-render-s is stopped, whatever it was estimated at: psf's march checks
+// between bands of rows.
 TEST(RenderJob, ARenderPastItsTimeLimitIsStopped) {
+  RenderQueue queue(gpu::GpuOptions{});
+  Metrics metrics;
+  FrameSpec f;
+  f.scene = std::make_shared<const Scene>(
+      parse_scene(test::minimal_scene(), test::source_path("scenes")));
+  f.pipeline = "psf";
+  f.terms = "all";
+  f.width = f.height = 1536;
+  f.settings = {{"step", 0.05}};
+  f.max_seconds = 0.2;  // enforced while it runs
+  std::promise<RenderOutcome> done;
+  auto t = Clock::now();
+  ASSERT_TRUE(post_render(queue, metrics, f, std::make_shared<CancelToken>(),
+                          [&](RenderOutcome o) { done.set_value(std::move(o)); }));
+  RenderOutcome o = done.get_future().get();
+  EXPECT_EQ(o.status, 503);
+  EXPECT_NE(o.error.find("--max-render-s"), std::string::npos) << o.error;
+  EXPECT_LT(ms_since(t), 15000);
+}
+
+// The path tracer is not cut off by the limit: it stops its passes in time and answers with the
+// samples drawn, and its plan says why.
+TEST(RenderJob, APathTracerPastItsTimeLimitAnswersWithItsSamples) {
   RenderQueue queue(gpu::GpuOptions{});
   Metrics metrics;
   FrameSpec f;
@@ -153,14 +178,17 @@ TEST(RenderJob, ARenderPastItsTimeLimitIsStopped) {
   f.pipeline = "reference";
   f.terms = "all";
   f.settings = {{"spp", 100000}};
-  f.max_seconds = 0.5;  // enforced while it runs, whatever it was estimated at
+  f.max_seconds = 0.5;
   std::promise<RenderOutcome> done;
   auto t = Clock::now();
   ASSERT_TRUE(post_render(queue, metrics, f, std::make_shared<CancelToken>(),
                           [&](RenderOutcome o) { done.set_value(std::move(o)); }));
   RenderOutcome o = done.get_future().get();
-  EXPECT_EQ(o.status, 503);
-  EXPECT_NE(o.error.find("--max-render-s"), std::string::npos) << o.error;
+  ASSERT_TRUE(o.result) << o.status << " " << o.error;
+  const std::string trace = plan_stage(o.result->plan, "trace").reason;
+  EXPECT_NE(trace.find("of 100000 samples per pixel, what the render's time limit (0.5 s)"),
+            std::string::npos)
+      << trace;
   EXPECT_LT(ms_since(t), 15000);
 }
 

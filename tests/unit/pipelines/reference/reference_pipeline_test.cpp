@@ -390,6 +390,60 @@ TEST(ReferencePipeline, MaxSecondsStopsThePassesAtTheSamplesDrawn) {
   EXPECT_NEAR(cut.seconds, three.seconds - 3 * per_sample + 5 + per_sample, 1e-6);
 }
 
+// The samples drawn, from the trace stage's reason ("N samples per pixel: ..." or "N of M ...").
+int samples_drawn(RenderResult& r) {
+  return std::stoi(plan_stage(r.plan, "trace").reason);
+}
+
+// With a budget the path tracer samples as many as its standard error says the budget needs,
+// past 8x the expected count where that count was far too low (a calibration outside its
+// range): here a budget that needs about 25x the 12 samples asked for is met.
+TEST(ReferencePipeline, ABudgetTakesTheSamplesItsStandardErrorSaysItNeeds) {
+  Scene s = small_scene("sphere", 16, 16);
+  ReferencePipeline p(test::shared_gpu());
+  RenderResult twelve = p.render(s, {Terms::Multiple, {{"spp", 12}, {"seed", 3}}});
+  ASSERT_TRUE(twelve.error_estimate);
+  const double budget = *twelve.error_estimate * std::sqrt(12.0 / 300);
+  RenderResult r = p.render(s, {Terms::Multiple, {{"spp", 12}, {"seed", 3}}, {}, budget});
+  const std::string reason = plan_stage(r.plan, "trace").reason;
+  ASSERT_TRUE(r.error_estimate);
+  EXPECT_LE(*r.error_estimate, budget) << reason;
+  EXPECT_GT(samples_drawn(r), 8 * 12) << reason;
+  EXPECT_NE(reason.find("under the budget"), std::string::npos) << reason;
+  // auto's default budget (none asked for) stops at 8x.
+  RenderRequest soft{Terms::Multiple, {{"spp", 12}, {"seed", 3}}, {}, budget};
+  soft.soft_budget = true;
+  RenderResult d = p.render(s, soft);
+  EXPECT_EQ(samples_drawn(d), 8 * 12) << plan_stage(d.plan, "trace").reason;
+  EXPECT_NE(plan_stage(d.plan, "trace").reason.find("the default budget's most"), std::string::npos)
+      << plan_stage(d.plan, "trace").reason;
+}
+
+// A caller's time limit (the daemon's --max-render-s) stops the passes in time to return the
+// samples drawn, with or without a budget, and the plan says why.
+TEST(ReferencePipeline, ATimeLimitStopsThePassesInTime) {
+  Scene s = small_scene("sphere", 16, 16);
+  ReferencePipeline p(test::shared_gpu());
+  RenderRequest budget{Terms::Multiple, {{"spp", 600}}, {}, 1e-4};  // 64x: tens of seconds
+  budget.time_limit_s = 0.5;
+  RenderResult r = p.render(s, budget);
+  std::string reason = plan_stage(r.plan, "trace").reason;
+  EXPECT_NE(reason.find("still over, at the render's time limit (0.5 s)"), std::string::npos)
+      << reason;
+  EXPECT_GE(samples_drawn(r), 3);
+  ASSERT_TRUE(r.error_estimate);
+  EXPECT_GT(*r.error_estimate, 1e-4);
+
+  RenderRequest many{Terms::Multiple, {{"spp", 1 << 20}}, {}};
+  many.time_limit_s = 0.5;
+  RenderResult m = p.render(s, many);
+  reason = plan_stage(m.plan, "trace").reason;
+  EXPECT_NE(reason.find(" of 1048576 samples per pixel, what the render's time limit (0.5 s)"),
+            std::string::npos)
+      << reason;
+  EXPECT_LT(samples_drawn(m), 1 << 20);
+}
+
 // The mesh queries through the voxels' triangle lists (cells=1) find the BVH's hits
 // (CellTriangles.KernelHitsMatchTheBvh), so with the same seed the paths are the same: the two
 // images differ by float rounding where a path's crossing lands within it of a collision, far
