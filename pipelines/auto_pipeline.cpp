@@ -1,6 +1,5 @@
 #include "pipelines/auto_pipeline.hpp"
 
-#include <chrono>
 #include <cmath>
 
 #include "bake/cache.hpp"
@@ -42,7 +41,8 @@ RenderRequest AutoPipeline::part_request(const BudgetChoice& c, size_t part,
     p.max_error = r.max_error.value_or(kDefaultMaxError);
     p.soft_budget = !r.max_error;
   }
-  p.time_limit_s = r.time_limit_s;  // render() takes off what the parts before took
+  p.time_limit_s = r.time_limit_s;  // counted from the request's start, whatever came before
+  p.started = r.started;
   return p;
 }
 
@@ -81,15 +81,8 @@ RenderResult AutoPipeline::render(const Scene& scene, const RenderRequest& reque
   Plan plan = describe(scene, request, c, &starts);
   starts.push_back(plan.stages.size());
   RenderResult out;
-  const auto start = std::chrono::steady_clock::now();
   for (size_t i = 0; i < c.way.parts.size(); ++i) {
-    RenderRequest part = part_request(c, i, request);
-    if (part.time_limit_s > 0)
-      part.time_limit_s = std::max(
-          1e-3,
-          part.time_limit_s -
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    RenderResult r = delegate(c.way.parts[i].pipeline).render(scene, part);
+    RenderResult r = delegate(c.way.parts[i].pipeline).render(scene, part_request(c, i, request));
     const std::string prefix = c.way.parts.size() == 2 ? c.way.parts[i].pipeline + "." : "";
     for (StageTime t : r.timings) {
       t.stage = prefix + t.stage;

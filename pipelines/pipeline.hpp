@@ -6,6 +6,7 @@
 //                          with the plan it followed and milliseconds per stage
 #pragma once
 
+#include <chrono>
 #include <functional>
 #include <map>
 #include <memory>
@@ -72,10 +73,11 @@ struct RenderRequest {
   // max_error is auto's own aim (none was asked for), not the caller's: the path tracer samples
   // towards it only as far as the calibrated count, 8x (no further on its measured error).
   bool soft_budget = false;
-  // > 0: the caller cancels the render this many seconds after render() begins (the daemon's
+  // > 0: the caller cancels the render this many seconds after `started` (the daemon's
   // --max-render-s); work that can stop early (the path tracer's passes) stops in time to
-  // return what it has.
+  // return what it has. `started`: when the request was made, unless the caller says otherwise.
   double time_limit_s = 0;
+  std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
 };
 
 struct RenderResult {

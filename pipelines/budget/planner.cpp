@@ -313,8 +313,9 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
   if (capped) others.push_back(std::move(*capped));
   // A path tracer whose max_seconds cuts its samples short (none quicker was found): the
   // samples expected to fit, their error and time.
-  if (budget.soft && tracer && best.settings.back().count("max_seconds") &&
-      best.way.parts.back().pipeline == "reference" && needed_spp > 0) {
+  if (budget.soft && tracer && !best.way.parts.empty() && !best.settings.empty() &&
+      best.way.parts.back().pipeline == "reference" && best.settings.back().count("max_seconds") &&
+      needed_spp > 0) {
     const double per = per_sample(best), left = best.settings.back().at("max_seconds");
     const double planned = best.sampled ? drawn_spp : best.expected_spp;
     const double fit = per > 0 ? std::max(3.0, std::floor(left / per)) : planned;

@@ -141,7 +141,6 @@ Plan ReferencePipeline::describe(const Scene& scene, Terms terms,
 }
 
 RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& request) {
-  const auto render_start = std::chrono::steady_clock::now();
   RenderResult result;
   require_terms(*this, request.terms);
   const ReferenceSettings s = ReferenceSettings::read(request.settings);  // once a frame
@@ -281,7 +280,9 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   double trace_limit = s.max_seconds;
   bool by_time_limit = false;
   if (request.time_limit_s > 0) {
-    const double before = std::chrono::duration<double>(trace_start - render_start).count();
+    // A tenth of the limit to spare, counted from the request's start (auto's earlier part, this
+    // render's upload).
+    const double before = std::chrono::duration<double>(trace_start - request.started).count();
     const double left = std::max(1e-3, 0.9 * request.time_limit_s - before);
     if (trace_limit <= 0 || left < trace_limit) {
       trace_limit = left;
@@ -320,7 +321,7 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     queue.finish();
     spp = done + n;
     done = spp - per_pass;  // the loop adds per_pass back
-    if (request.max_error && spp >= next_check && spp % 12 == 0) {
+    if (request.max_error && ((spp >= next_check && spp % 12 == 0) || spp == cap)) {
       noise = noise_now(spp);
       if (*noise <= *request.max_error) break;
       next_check = spp + std::max(12, spp / 12 / 12 * 12);
