@@ -214,20 +214,37 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
                  ": about " + std::to_string(ref.expected_spp) + " spp from its " + how + ", " +
                  seconds(ref.expected_seconds);
   }
+  // The path tracer's seconds at `spp` samples without max_seconds, its other parts' seconds,
+  // and its upload and seconds a sample.
+  auto tracer_seconds = [&](const BudgetChoice& c, double spp) {
+    Settings at = c.settings.back();
+    at.erase("max_seconds");
+    at["spp"] = spp;
+    bool unused = false;
+    return part_seconds(scene, c.way.parts.back(), at, baked, &unused);
+  };
+  auto before_seconds = [&](const BudgetChoice& c) {
+    double before = 0;
+    for (size_t i = 0; i + 1 < c.way.parts.size(); ++i) {
+      bool unused = false;
+      before += part_seconds(scene, c.way.parts[i], c.settings[i], baked, &unused);
+    }
+    return before;
+  };
+  struct Sampling {
+    double upload, per_sample;
+  };
+  auto sampling = [&](const BudgetChoice& c) {
+    const double at_3 = tracer_seconds(c, 3), per = (tracer_seconds(c, 99) - at_3) / 96;
+    return Sampling{std::max(0.0, at_3 - 3 * per), per};
+  };
   // The path tracer with as many samples as fit the soft budget's time: a fallback candidate.
   std::optional<BudgetChoice> capped;
   if (ref.sampled && budget.soft && ref.expected_seconds > budget.soft_seconds) {
     BudgetChoice c = ref;
     Settings& s = c.settings.back();
-    bool unused = false;
     double at_spp = ref.expected_seconds, spp = drawn_spp;
-    s["spp"] = 12;
-    double at_12 = 0;
-    for (size_t i = 0; i < c.way.parts.size(); ++i) {
-      Settings at = c.settings[i];
-      at.erase("max_seconds");
-      at_12 += part_seconds(scene, c.way.parts[i], at, baked, &unused);
-    }
+    const double at_12 = before_seconds(c) + tracer_seconds(c, 12);
     double per_sample = (at_spp - at_12) / std::max(1.0, spp - 12);
     double fit = per_sample > 0 ? 12 + (budget.soft_seconds - at_12) / per_sample : spp;
     int n = static_cast<int>(std::floor(fit / 12) * 12);
@@ -245,34 +262,13 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
   // A soft budget's path tracer stops sampling at its time, whatever its estimate said (the
   // estimate can be several times low: docs/STRESS.md, mixed/1680): the soft seconds less its
   // other parts' and its own upload (at least a quarter of them), or the request's own
-  // max_seconds if less. The path tracer's seconds at `spp` samples, without max_seconds:
-  auto tracer_seconds = [&](const BudgetChoice& c, double spp) {
-    Settings at = c.settings.back();
-    at.erase("max_seconds");
-    at["spp"] = spp;
-    bool unused = false;
-    return part_seconds(scene, c.way.parts.back(), at, baked, &unused);
-  };
-  auto before_seconds = [&](const BudgetChoice& c) {  // its other parts'
-    double before = 0;
-    for (size_t i = 0; i + 1 < c.way.parts.size(); ++i) {
-      bool unused = false;
-      before += part_seconds(scene, c.way.parts[i], c.settings[i], baked, &unused);
-    }
-    return before;
-  };
-  auto per_sample = [&](const BudgetChoice& c) {
-    return (tracer_seconds(c, 99) - tracer_seconds(c, 3)) / 96;
-  };
-  auto upload_seconds = [&](const BudgetChoice& c) {
-    return std::max(0.0, tracer_seconds(c, 3) - 3 * per_sample(c));
-  };
+  // max_seconds if less.
   const int needed_spp = ref.expected_spp;
   const bool tracer = ref.sampled;  // ref is moved into the choice below
   if (budget.soft && tracer) {
     for (BudgetChoice* c : {&ref, capped ? &*capped : nullptr}) {
       if (!c) continue;
-      double left = std::max(budget.soft_seconds - before_seconds(*c) - upload_seconds(*c),
+      double left = std::max(budget.soft_seconds - before_seconds(*c) - sampling(*c).upload,
                              budget.soft_seconds / 4);
       Settings& s = c->settings.back();
       if (s.count("max_seconds") && s["max_seconds"] > 0) left = std::min(left, s["max_seconds"]);
@@ -316,12 +312,13 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
   if (budget.soft && tracer && !best.way.parts.empty() && !best.settings.empty() &&
       best.way.parts.back().pipeline == "reference" && best.settings.back().count("max_seconds") &&
       needed_spp > 0) {
-    const double per = per_sample(best), left = best.settings.back().at("max_seconds");
+    const Sampling at = sampling(best);
+    const double per = at.per_sample, left = best.settings.back().at("max_seconds");
     const double planned = best.sampled ? drawn_spp : best.expected_spp;
     const double fit = per > 0 ? std::max(3.0, std::floor(left / per)) : planned;
     if (fit < planned) {
       best.expected_error = max_error * std::sqrt(needed_spp / fit) / std::sqrt(1.2);
-      best.expected_seconds = before_seconds(best) + upload_seconds(best) + left;
+      best.expected_seconds = before_seconds(best) + at.upload + left;
       best.reason += ": about " + std::to_string(int(fit)) + " samples fit, expected " +
                      percent(best.expected_error) + " in " + seconds(best.expected_seconds);
     }

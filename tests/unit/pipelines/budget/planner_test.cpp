@@ -1,6 +1,5 @@
 // The budget planner (pipelines/budget/): scene classes, the calibration table's predictions and
-// the choice, on a hand-made table; and, on the GPU, that auto meets a budget on a scene outside
-// the shipped calibration set, measured against the reference.
+// the choice, on a hand-made table (auto on the GPU: auto_budget_test.cpp).
 #include "pipelines/budget/planner.hpp"
 
 #include <gtest/gtest.h>
@@ -8,6 +7,7 @@
 #include <fstream>
 
 #include "../../test_util.hpp"
+#include "budget_scenes.hpp"
 #include "pipelines/auto_pipeline.hpp"
 #include "pipelines/cost.hpp"
 #include "pipelines/metrics.hpp"
@@ -16,16 +16,7 @@
 namespace scatter {
 namespace {
 
-Scene sphere_scene(double albedo, double tau, double g, int size = 32) {
-  nlohmann::json j = nlohmann::json::parse(std::ifstream(test::source_path("scenes/sphere.json")));
-  double sigma_t = tau / 2;
-  j["medium"]["sigma_s"] = {sigma_t * albedo, sigma_t * albedo, sigma_t * albedo};
-  j["medium"]["sigma_a"] = {sigma_t * (1 - albedo), sigma_t * (1 - albedo), sigma_t * (1 - albedo)};
-  j["medium"]["g"] = g;
-  j["image"] = {{"width", size}, {"height", size}};
-  j["voxels"] = 32;
-  return parse_scene(j, ".");
-}
+using test::sphere_scene;
 
 CalibrationEntry entry(const std::string& name, Terms terms, double albedo, double tau,
                        std::map<std::string, double> error, double noise = 0) {
@@ -331,82 +322,6 @@ TEST(Planner, CountsOnlyTheViewWhileLblKeepsItsState) {
   };
   BudgetChoice warm = plan_budget(s, Terms::All, Budget{0.10}, {}, table(), held);
   EXPECT_NEAR(lbl_seconds(warm), frame.seconds - frame.kept_seconds, 1e-9 * frame.seconds);
-}
-
-// lbl keeps its state for a camera-only change, not for a moved light, another material or a
-// request for terms it did not diffuse; auto asks its own delegate.
-TEST(AutoBudget, KnowsWhatItsLblDelegateKeeps) {
-  Scene s = sphere_scene(0.9, 4, 0, 16);
-  s.voxels = 16;
-  auto lbl = make_pipeline("lbl", test::shared_gpu());
-  const RenderRequest all{Terms::All, {}, {}}, single{Terms::Single, {}, {}};
-  EXPECT_FALSE(lbl->keeps(s, all));  // nothing made yet
-  lbl->render(s, single);
-  EXPECT_TRUE(lbl->keeps(s, single));
-  EXPECT_FALSE(lbl->keeps(s, all));  // the single term diffused nothing
-  lbl->render(s, all);
-  EXPECT_TRUE(lbl->keeps(s, all));
-  Scene moved = s;
-  moved.camera.position = moved.camera.position + Vec3{0.5, 0.2, 0};
-  EXPECT_TRUE(lbl->keeps(moved, all));
-  moved.lights[0].position = moved.lights[0].position + Vec3{0.3, 0, 0};
-  EXPECT_FALSE(lbl->keeps(moved, all));
-  Scene denser = s;
-  denser.medium.sigma_s = denser.medium.sigma_s * 2.0;
-  EXPECT_FALSE(lbl->keeps(denser, all));
-  EXPECT_FALSE(lbl->keeps(s, {Terms::All, {{"rays", 3}}, {}}));  // another march
-}
-
-// The plan auto returns with a frame says what its parts found while rendering: the path
-// tracer's trace stage, the samples it drew and their standard error (planned: the samples it
-// expected).
-TEST(AutoBudget, ThePlanSaysWhatItsPartsFoundWhileRendering) {
-  Scene s = sphere_scene(0.97, 5, -0.9, 16);  // backward: the path tracer, no lbl
-  AutoPipeline a(test::shared_gpu(), nullptr);
-  const RenderRequest request{Terms::Multiple, {}, {}, 0.3};
-  Plan planned = a.plan(s, request);
-  ASSERT_EQ(planned.pipeline, "auto -> reference:sampled");
-  const std::string drawn = "samples per pixel: relative standard error";
-  EXPECT_EQ(plan_stage(planned, "trace").reason.find(drawn), std::string::npos);
-  RenderResult got = a.render(s, request);
-  ASSERT_TRUE(got.error_estimate);
-  const std::string trace = plan_stage(got.plan, "trace").reason;
-  EXPECT_NE(trace.find(drawn), std::string::npos) << trace;
-  EXPECT_NE(trace.find(short_number(100 * *got.error_estimate) + " %"), std::string::npos)
-      << trace << " (error estimate " << *got.error_estimate << ")";
-}
-
-// Done when: a budget request on a scene that was not among the calibration scenes meets its
-// budget, measured against the reference. A sphere of albedo 0.95, tau 6 and g 0.3 is none of
-// them (tools/calibrate.cpp: albedo 0.6/0.9/0.99, tau 1/4/16, g 0/0.7).
-TEST(AutoBudget, MeetsItsBudgetOnASceneOutsideTheCalibrationSet) {
-  Scene s = sphere_scene(0.95, 6, 0.3, 40);
-  auto mask = coverage_mask(s, voxelize(s, {.resolution = s.voxels}));
-  AutoPipeline a(test::shared_gpu(), nullptr);
-  auto reference = make_pipeline("reference", test::shared_gpu());
-  // The references: the marched single term, and all terms as it plus the path tracer's
-  // multiple term, whose noise is taken out of the error in quadrature (independent, zero mean).
-  Image single = reference->render(s, {Terms::Single, {{"step", 0.125}}, {}}).image;
-  RenderResult multiple =
-      reference->render(s, {Terms::Multiple, {{"spp", 2048}, {"seed", 99}}, {}});
-  Image all = single;
-  for (size_t k = 0; k < all.rgb.size(); ++k) all.rgb[k] += multiple.image.rgb[k];
-  const double noise = relative_norm(*multiple.std_error, all, mask);
-  ASSERT_LT(noise, 0.05);
-  for (auto [terms, budget] : {std::pair{Terms::Single, 0.05}, {Terms::All, 0.2}}) {
-    RenderResult got = a.render(s, {terms, {}, {}, budget});
-    ASSERT_TRUE(got.plan.expected_error);
-    EXPECT_LE(*got.plan.expected_error, budget) << got.plan.pipeline;
-    ASSERT_TRUE(got.error_estimate);
-    const Image& truth = terms == Terms::Single ? single : all;
-    double err = relative_rmse(got.image, truth, mask);
-    double n = terms == Terms::Single ? 0 : noise;
-    EXPECT_LE(std::sqrt(std::max(0.0, err * err - n * n)), budget)
-        << got.plan.pipeline << " error " << err << ", reference noise " << n;
-    std::cout << to_string(terms) << " budget " << budget << ": " << got.plan.pipeline << " error "
-              << err << " (expected " << *got.plan.expected_error << ", reference noise " << n
-              << ")\n";
-  }
 }
 
 }  // namespace
