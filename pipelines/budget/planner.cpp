@@ -175,8 +175,10 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     std::string how;
     if (noise) {
       // Relative standard error noise / sqrt(spp), with a fifth to spare for the estimate's own
-      // scatter; at run time the path tracer samples until its standard error meets the budget.
-      double spp = std::ceil(1.2 * std::pow(noise->value / max_error, 2));
+      // scatter; at run time the path tracer samples until its standard error is under the
+      // budget with its margin.
+      double spp =
+          std::ceil(1.2 * std::pow(noise->value / (RenderRequest::kBudgetMargin * max_error), 2));
       ref.expected_spp = static_cast<int>(std::clamp(std::ceil(spp / 12) * 12, 24.0, 1048572.0));
       how = "noise " + short_number(noise->value) + "/sqrt(spp) (" + noise->note + ")";
     } else {

@@ -250,13 +250,14 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
   int terms = request.terms == Terms::Single ? 1 : (request.terms == Terms::Multiple ? 2 : 3);
   // Progressive passes of a few samples keep each launch short and let callers see progress.
   // With a budget (max_error), spp is the expected count: the passes go on until the relative
-  // standard error is under the budget, checked every twelfth of the samples so far (whole
-  // rounds of three), up to 8x spp, or, for a budget the caller asked for (not auto's soft
-  // one), as many more as the standard error measured then says the budget needs (up to 64x). With
-  // max_seconds, or a time limit (9/10 of it, less what came before the trace), no pass starts once
-  // not even half a sample fits in what is left, and a pass takes only the samples expected to fit
-  // (the first pass one sample, to time it).
+  // standard error is under the budget with its margin (RenderRequest::kBudgetMargin), checked
+  // every twelfth of the samples so far (whole rounds of three), up to 8x spp, or, for a budget the
+  // caller asked for (not auto's soft one), as many more as the standard error measured then says
+  // the budget needs (up to 64x). With max_seconds, or a time limit (9/10 of it, less what came
+  // before the trace), no pass starts once not even half a sample fits in what is left, and a pass
+  // takes only the samples expected to fit (the first pass one sample, to time it).
   const int per_pass = std::min(s.spp, 4);
+  const double target = RenderRequest::kBudgetMargin * request.max_error.value_or(0);
   int cap = request.max_error ? std::min(8 * s.spp, 1 << 20) : s.spp;
   const int most = request.max_error && !request.soft_budget ? std::min(64 * s.spp, 1 << 20) : cap;
   const double sq_scale = square_scale(scene);
@@ -323,10 +324,10 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
     done = spp - per_pass;  // the loop adds per_pass back
     if (request.max_error && ((spp >= next_check && spp % 12 == 0) || spp == cap)) {
       noise = noise_now(spp);
-      if (*noise <= *request.max_error) break;
+      if (*noise <= target) break;
       next_check = spp + std::max(12, spp / 12 / 12 * 12);
-      // What the standard error measured says the budget needs, a tenth to spare.
-      const double need = 1.1 * spp * std::pow(*noise / *request.max_error, 2);
+      // What the standard error measured says the target needs, a tenth to spare.
+      const double need = 1.1 * spp * std::pow(*noise / target, 2);
       if (std::isfinite(need) && need > cap)
         cap = int(std::min<double>(most, std::ceil(need / 12) * 12));
     }
@@ -355,7 +356,8 @@ RenderResult ReferencePipeline::render(const Scene& scene, const RenderRequest& 
         std::to_string(spp) + " samples per pixel: relative standard error " +
         short_number(100 * *noise) + " % " +
         (*noise <= *request.max_error ? "under" : "still over, " + where + ",") +
-        " the budget of " + short_number(100 * *request.max_error) + " %";
+        " the budget of " + short_number(100 * *request.max_error) + " % (aiming at " +
+        short_number(100 * target) + " %)";
   } else if (out_of_time) {
     plan_stage(result.plan, "trace").reason =
         std::to_string(spp) + " of " + std::to_string(s.spp) + " samples per pixel, what " +

@@ -59,7 +59,8 @@ int samples_drawn(RenderResult& r) {
 
 // With a budget the path tracer samples as many as its standard error says the budget needs,
 // past 8x the expected count where that count was far too low (a calibration outside its
-// range): here a budget that needs about 25x the 12 samples asked for is met.
+// range): here a budget that needs about 25x the 12 samples asked for (31x with the margin the
+// passes aim at) is met.
 TEST(ReferencePipeline, ABudgetTakesTheSamplesItsStandardErrorSaysItNeeds) {
   Scene s = small_scene("sphere", 16, 16);
   ReferencePipeline p(test::shared_gpu());
@@ -69,7 +70,7 @@ TEST(ReferencePipeline, ABudgetTakesTheSamplesItsStandardErrorSaysItNeeds) {
   RenderResult r = p.render(s, {Terms::Multiple, {{"spp", 12}, {"seed", 3}}, {}, budget});
   const std::string reason = plan_stage(r.plan, "trace").reason;
   ASSERT_TRUE(r.error_estimate);
-  EXPECT_LE(*r.error_estimate, budget) << reason;
+  EXPECT_LE(*r.error_estimate, RenderRequest::kBudgetMargin * budget) << reason;
   EXPECT_GT(samples_drawn(r), 8 * 12) << reason;
   EXPECT_NE(reason.find("under the budget"), std::string::npos) << reason;
   // auto's default budget (none asked for) stops at 8x.
