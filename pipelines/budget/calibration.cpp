@@ -171,20 +171,36 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
     p.note = "from " + near[0].entry->scene + (k > 1 ? " and " + near[1].entry->scene : "");
   }
   std::string outside;
+  double factor = outside_factor;
   for (int i = 0; i < SceneClass::kFeatures; ++i) {
     double f = c.feature(i);
     if (f < lo[i] - 0.05 || f > hi[i] + 0.05) {
       outside += std::string(outside.empty() ? "" : ", ") + SceneClass::feature_name(i) + " " +
                  short_number(i == 0 ? c.tau : (i == 1 ? c.albedo : c.g)) +
                  " outside the calibrated range";
+      if (noise && i == 2) {
+        // The path tracer's noise past the calibrated g grows with the phase function's spread
+        // (phase_spread): its ratio to the spread at the calibrated g nearest, to the power
+        // 1.5, where that is more than the flat factor.
+        const double edge = std::clamp(f, lo[i], hi[i]) * 0.7;  // feature 2 is g / 0.7
+        factor = std::max(factor, std::pow(phase_spread(c.g) / phase_spread(edge), 1.5));
+      }
     }
   }
   if (!outside.empty()) {
     p.inside = false;
-    p.value *= outside_factor;
-    p.note = outside + " (x" + short_number(outside_factor) + ", conservative); " + p.note;
+    p.value *= factor;
+    p.note = outside + " (x" + short_number(factor) + ", conservative); " + p.note;
   }
   return p;
+}
+
+double phase_spread(double g) {
+  // 4 pi times the integral of the Henyey-Greenstein phase function squared over the sphere is
+  // (1 + g^2) / (1 - g^2)^2; its square root: 1 at g 0, 2.39 at |g| 0.7, 7.08 at 0.9, 70.7 at
+  // 0.99.
+  const double g2 = std::min(g * g, 0.9999);
+  return std::sqrt(1 + g2) / (1 - g2);
 }
 
 std::optional<CalibrationTable::Prediction> CalibrationTable::predict_error(
