@@ -46,7 +46,8 @@ for f in "$out"/scenes/*.json; do
     terms=${run%%:*} budget=${run##*:}
     "$bin" bench "$f" --pipeline auto --terms "$terms" --sweep seed=1 --max-error "$budget" \
       --frames 1 --reference "$out/refs/$n-$terms.exr" --reference-spp 32768 \
-      --csv "$out/$tag/$n-$terms-$budget.csv" > "$out/$tag/$n-$terms-$budget.log" 2>&1
+      --csv "$out/$tag/$n-$terms-$budget.csv" > "$out/$tag/$n-$terms-$budget.log" 2>&1 ||
+      echo "failed: $n $terms $budget (see $out/$tag/$n-$terms-$budget.log)" >&2
   done
 done
 python3 - "$out/$tag" <<'PY'
@@ -56,7 +57,10 @@ print("| --- | --- | --- | --- | --- | --- | --- | --- |")
 over = runs = 0
 for f in sorted(glob.glob(os.path.join(sys.argv[1], "*.csv"))):
     scene, terms, budget = os.path.basename(f)[:-4].rsplit("-", 2)
-    r = list(csv.DictReader(open(f)))[-1]
+    rows = list(csv.DictReader(open(f)))
+    if not rows:
+        continue
+    r = rows[-1]
     e, n, b = float(r['rel_rmse']), float(r['reference_noise']), float(budget)
     d = max(0.0, e * e - n * n) ** 0.5
     runs += 1

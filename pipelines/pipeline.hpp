@@ -71,9 +71,9 @@ struct RenderRequest {
   // auto plans by it, the reference takes as many samples as it needs; other pipelines reject it.
   std::optional<double> max_error;
   // The path tracer samples until its relative standard error is under this fraction of
-  // max_error: one image's error scatters about its standard error (on a 24 x 24 sphere at g -0.5
-  // and -0.9, 0.97-1.06x it over three seeds a budget, docs/pipelines/auto.md), and a run that
-  // stopped at the budget itself was over it about half the time.
+  // max_error: one image's error scatters about its standard error (a 24 x 24 sphere at g -0.5
+  // and -0.9, budgets 10 and 20 %, three seeds each: 0.97-1.06x it), and stopping at the budget
+  // itself left 7 of 31 budget runs off the calibration grid over it (docs/BENCHMARKS.md).
   static constexpr double kBudgetMargin = 0.9;
   // max_error is auto's own aim (none was asked for), not the caller's: the path tracer samples
   // towards it only as far as the calibrated count, 8x (no further on its measured error).

@@ -27,9 +27,10 @@ struct NamedScene {
   Scene scene;
 };
 
-// The calibration set (27 scenes): constant-density spheres at albedo 0.6, 0.9, 0.99, tau 1, 4,
-// 16, g 0 and 0.7; boxes of noise density at albedo 0.6, 0.9, 0.99, tau 2 and 8 (and one at
-// g 0.7); two dielectric spheres (ior 1.4). None of the shipped scenes is among them.
+// The calibration set (43 scenes): constant-density spheres at albedo 0.6, 0.9, 0.99, tau 1, 4,
+// 16, g -0.7, 0 and 0.7; boxes of noise density at albedo 0.6, 0.9, 0.99, tau 2 and 8 (and two
+// at g -0.7 and 0.7); noise-density spheres at albedo 0.9, tau 2 and 8, g -0.7, 0 and 0.7; two
+// dielectric spheres (ior 1.4). None of the shipped scenes is among them.
 std::vector<NamedScene> calibration_scenes(const CalibrateOptions& o);
 
 int run_calibration(const CalibrateOptions& o);

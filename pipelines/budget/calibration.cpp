@@ -171,7 +171,8 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
     p.note = "from " + near[0].entry->scene + (k > 1 ? " and " + near[1].entry->scene : "");
   }
   std::string outside;
-  double factor = outside_factor;
+  double spread = 1;      // the noise's growth past the calibrated g
+  bool flat_too = false;  // a feature other than the noise's g outside
   for (int i = 0; i < SceneClass::kFeatures; ++i) {
     double f = c.feature(i);
     if (f < lo[i] - 0.05 || f > hi[i] + 0.05) {
@@ -181,12 +182,19 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
       if (noise && i == 2) {
         // The path tracer's noise past the calibrated g grows with the phase function's spread
         // (phase_spread): its ratio to the spread at the calibrated g nearest, to the power
-        // 1.5, where that is more than the flat factor.
+        // 1.5 (conservative: from g 0 to -0.7 the table's noise grows 1.6-2.4x, the spread's
+        // ratio 2.39 to that power 3.7x), where that is more than the flat factor.
         const double edge = std::clamp(f, lo[i], hi[i]) * 0.7;  // feature 2 is g / 0.7
-        factor = std::max(factor, std::pow(phase_spread(c.g) / phase_spread(edge), 1.5));
+        spread = std::pow(phase_spread(c.g) / phase_spread(edge), 1.5);
+      } else {
+        flat_too = true;
       }
     }
   }
+  // The flat factor once, or the spread's where larger; both where another feature lies outside
+  // as well.
+  const double factor =
+      spread > outside_factor ? spread * (flat_too ? outside_factor : 1.0) : outside_factor;
   if (!outside.empty()) {
     p.inside = false;
     p.value *= factor;

@@ -198,8 +198,8 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     ref.expected_seconds = 0;
     // The samples it is expected to draw: the path tracer goes on past spp, up to 8x (more only
     // where its measured standard error says the calibrated noise was low), until its standard
-    // error meets the budget (pipelines/reference/reference_pipeline.cpp), so a request's spp
-    // below the expected count is not what it costs.
+    // error is under the budget with its margin (pipelines/reference/reference_pipeline.cpp), so a
+    // request's spp below the expected count is not what it costs.
     drawn_spp = std::min<double>(ref.expected_spp, 8 * s["spp"]);
     for (size_t i = 0; i < ref.way.parts.size(); ++i) {
       bool unused = false;
@@ -212,8 +212,10 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     }
     ref.reason = ref.way.id() + ": the path tracer" +
                  (terms == Terms::All ? " (plus the marched single term)" : "") +
-                 ", sampled until its relative standard error is under " + percent(max_error) +
-                 ": about " + std::to_string(ref.expected_spp) + " spp from its " + how + ", " +
+                 ", sampled until its relative standard error is under " +
+                 percent(RenderRequest::kBudgetMargin * max_error) + " (the budget's " +
+                 percent(max_error) + " with its margin)" + ": about " +
+                 std::to_string(ref.expected_spp) + " spp from its " + how + ", " +
                  seconds(ref.expected_seconds);
   }
   // The path tracer's seconds at `spp` samples without max_seconds, its other parts' seconds,
@@ -254,7 +256,9 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
       s["spp"] = n;
       c.sampled = false;  // exactly n samples: no budget to sample towards
       c.expected_spp = n;
-      c.expected_error = max_error * std::sqrt(double(ref.expected_spp) / n) / std::sqrt(1.2);
+      // expected_spp is sized for the margin's aim, with a fifth to spare.
+      c.expected_error = RenderRequest::kBudgetMargin * max_error *
+                         std::sqrt(double(ref.expected_spp) / n) / std::sqrt(1.2);
       c.expected_seconds = budget.soft_seconds;
       c.reason = c.way.id() + ": the path tracer at " + std::to_string(n) + " spp, what fits " +
                  seconds(budget.soft_seconds) + ": expected " + percent(c.expected_error);
@@ -319,7 +323,8 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     const double planned = best.sampled ? drawn_spp : best.expected_spp;
     const double fit = per > 0 ? std::max(3.0, std::floor(left / per)) : planned;
     if (fit < planned) {
-      best.expected_error = max_error * std::sqrt(needed_spp / fit) / std::sqrt(1.2);
+      best.expected_error =
+          RenderRequest::kBudgetMargin * max_error * std::sqrt(needed_spp / fit) / std::sqrt(1.2);
       best.expected_seconds = before_seconds(best) + at.upload + left;
       best.reason += ": about " + std::to_string(int(fit)) + " samples fit, expected " +
                      percent(best.expected_error) + " in " + seconds(best.expected_seconds);

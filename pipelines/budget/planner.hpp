@@ -37,7 +37,8 @@ struct BudgetChoice {
   Way way;
   std::vector<Settings> settings;  // per part: the quality's settings, the request's over them
   double expected_error = 0, expected_seconds = 0;
-  // The path tracer (the way's last part), sampling until its standard error meets the budget.
+  // The path tracer (the way's last part), sampling until its standard error is under the budget
+  // with its margin (RenderRequest::kBudgetMargin).
   bool sampled = false;
   int expected_spp = 0;  // sampled: what the calibrated noise says the budget needs
   SceneClass cls;

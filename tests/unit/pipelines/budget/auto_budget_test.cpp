@@ -100,8 +100,8 @@ TEST(AutoBudget, MeetsItsBudgetOnASceneOutsideTheCalibrationSet) {
 }
 
 // Backward scattering past the calibrated g: psf's all terms, predicted from g -0.7 doubled, and
-// the path tracer's noise, grown with the phase function's spread. Before, auto took psf here
-// (calibrated at g 0 and 0.7 alone), which reached 39 % on all terms at 20 %.
+// the path tracer's noise, grown with the phase function's spread. Before (calibrated at g 0 and
+// 0.7 alone), auto took psf for the same sphere at 24 x 24, which reached 39 % at 20 %.
 TEST(AutoBudget, MeetsItsBudgetPastTheCalibratedBackwardScattering) {
   expect_budgets_met(sphere_scene(0.97, 5, -0.9, 16), {{Terms::All, 0.2}}, 16384);
 }

@@ -113,8 +113,19 @@ TEST(CalibrationTable, TheNoisePastTheCalibratedGGrowsWithThePhaseSpread) {
   EXPECT_FALSE(p->inside);
   EXPECT_NEAR(p->value, 1.6 * std::pow(phase_spread(-0.9), 1.5), 1e-9) << p->note;
   EXPECT_NE(p->note.find("g -0.9 outside the calibrated range"), std::string::npos) << p->note;
-  c.g = 0.3;  // spread 1.09: the flat 1.5
+  c.g = 0.3;  // spread 1.15 (1.23 to the power 1.5): the flat 1.5
   EXPECT_NEAR(t.predict_noise(c)->value, 1.6 * 1.5, 1e-9);
+  c.g = -0.9;
+  c.tau = 64;  // outside in tau too: both factors
+  EXPECT_NEAR(t.predict_noise(c)->value, 1.6 * std::pow(phase_spread(-0.9), 1.5) * 1.5, 1e-9);
+  c.tau = 4;
+  // Calibrated at g -0.7 as well: the ratio to the spread there (g in features of g / 0.7).
+  CalibrationEntry back = t.entries[3];
+  back.cls.g = -0.7;
+  back.noise = 2.0;
+  t.entries.push_back(back);
+  EXPECT_NEAR(t.predict_noise(c)->value,
+              2.0 * std::pow(phase_spread(-0.9) / phase_spread(-0.7), 1.5), 1e-9);
   // An approximate way's error is not scaled by it (psf's all terms fell from 19 to 14 % between
   // g 0.7 and 0.9 on a 24 x 24 sphere): doubled.
   c.g = -0.9;
