@@ -184,7 +184,7 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
         // (phase_spread): its ratio to the spread at the calibrated g nearest, to the power
         // 1.5 (conservative: from g 0 to -0.7 the table's noise grows 1.6-2.4x, the spread's
         // ratio 2.39 to that power 3.7x), where that is more than the flat factor.
-        const double edge = std::clamp(f, lo[i], hi[i]) * 0.7;  // feature 2 is g / 0.7
+        const double edge = std::clamp(f, lo[i], hi[i]) * SceneClass::kGStep;
         spread = std::pow(phase_spread(c.g) / phase_spread(edge), 1.5);
       } else {
         flat_too = true;

@@ -93,6 +93,13 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
                          const Settings& request, const CalibrationTable& table,
                          const IsBaked& baked) {
   const double max_error = budget.max_error;
+  // The path tracer's samples are sized for the margin's aim with a fifth to spare for the
+  // estimate's own scatter (1.2 (noise / aim)^2); the error expected at n samples of a count
+  // sized so.
+  const double aim = RenderRequest::kBudgetMargin * max_error;
+  auto error_at = [&](double sized_spp, double n) {
+    return aim * std::sqrt(sized_spp / n) / std::sqrt(1.2);
+  };
   if (terms == Terms::Surface)
     throw ValidationError("terms", "the budget planner renders single, multiple or all terms");
   BudgetChoice best;
@@ -174,11 +181,9 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     auto noise = table.predict_noise(ref.cls);
     std::string how;
     if (noise) {
-      // Relative standard error noise / sqrt(spp), with a fifth to spare for the estimate's own
-      // scatter; at run time the path tracer samples until its standard error is under the
-      // budget with its margin.
-      double spp =
-          std::ceil(1.2 * std::pow(noise->value / (RenderRequest::kBudgetMargin * max_error), 2));
+      // Relative standard error noise / sqrt(spp), sized for the aim (above); at run time the
+      // path tracer samples until its standard error is under the aim.
+      double spp = std::ceil(1.2 * std::pow(noise->value / aim, 2));
       ref.expected_spp = static_cast<int>(std::clamp(std::ceil(spp / 12) * 12, 24.0, 1048572.0));
       how = "noise " + short_number(noise->value) + "/sqrt(spp) (" + noise->note + ")";
     } else {
@@ -212,9 +217,8 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     }
     ref.reason = ref.way.id() + ": the path tracer" +
                  (terms == Terms::All ? " (plus the marched single term)" : "") +
-                 ", sampled until its relative standard error is under " +
-                 percent(RenderRequest::kBudgetMargin * max_error) + " (the budget's " +
-                 percent(max_error) + " with its margin)" + ": about " +
+                 ", sampled until its relative standard error is under " + percent(aim) +
+                 " (the budget's " + percent(max_error) + " with its margin): about " +
                  std::to_string(ref.expected_spp) + " spp from its " + how + ", " +
                  seconds(ref.expected_seconds);
   }
@@ -256,9 +260,7 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
       s["spp"] = n;
       c.sampled = false;  // exactly n samples: no budget to sample towards
       c.expected_spp = n;
-      // expected_spp is sized for the margin's aim, with a fifth to spare.
-      c.expected_error = RenderRequest::kBudgetMargin * max_error *
-                         std::sqrt(double(ref.expected_spp) / n) / std::sqrt(1.2);
+      c.expected_error = error_at(ref.expected_spp, n);
       c.expected_seconds = budget.soft_seconds;
       c.reason = c.way.id() + ": the path tracer at " + std::to_string(n) + " spp, what fits " +
                  seconds(budget.soft_seconds) + ": expected " + percent(c.expected_error);
@@ -323,8 +325,7 @@ BudgetChoice plan_budget(const Scene& scene, Terms terms, const Budget& budget,
     const double planned = best.sampled ? drawn_spp : best.expected_spp;
     const double fit = per > 0 ? std::max(3.0, std::floor(left / per)) : planned;
     if (fit < planned) {
-      best.expected_error =
-          RenderRequest::kBudgetMargin * max_error * std::sqrt(needed_spp / fit) / std::sqrt(1.2);
+      best.expected_error = error_at(needed_spp, fit);
       best.expected_seconds = before_seconds(best) + at.upload + left;
       best.reason += ": about " + std::to_string(int(fit)) + " samples fit, expected " +
                      percent(best.expected_error) + " in " + seconds(best.expected_seconds);

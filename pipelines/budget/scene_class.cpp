@@ -12,7 +12,7 @@ double SceneClass::feature(int i) const {
     case 1:
       return -std::log10(std::max(1 - albedo, 1e-6));
     default:
-      return g / 0.7;
+      return g / kGStep;
   }
 }
 

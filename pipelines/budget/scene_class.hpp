@@ -23,8 +23,9 @@ struct SceneClass {
   double contrast = 1;
 
   // The continuous features, scaled so that one unit is about one step of the calibration grid:
-  // log2(tau) / 2, -log10(1 - albedo) and g / 0.7.
+  // log2(tau) / 2, -log10(1 - albedo) and g / kGStep.
   double feature(int i) const;
+  static constexpr double kGStep = 0.7;
   static constexpr int kFeatures = 3;
   static const char* feature_name(int i);
 };
