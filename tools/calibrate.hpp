@@ -19,18 +19,27 @@ struct CalibrateOptions {
   double target_noise = 0.01;  // the references' relative noise
   int max_spp = 4096;
   bool quick = false;  // a few scenes: to try the command, not to ship
+  // Scenes `out` already holds (by name) keep their rows (errors, times, noise), classified
+  // anew; only the others are rendered. For scenes added to the set: the rows kept are the same
+  // as a full run's but for their times.
+  bool reuse = false;
   std::string device;
 };
 
 struct NamedScene {
   std::string name;
   Scene scene;
+  std::string twin;  // the scene of the set it is lit from further round than (CalibrationEntry)
 };
 
-// The calibration set (43 scenes): constant-density spheres at albedo 0.6, 0.9, 0.99, tau 1, 4,
-// 16, g -0.7, 0 and 0.7; boxes of noise density at albedo 0.6, 0.9, 0.99, tau 2 and 8 (and two
-// at g -0.7 and 0.7); noise-density spheres at albedo 0.9, tau 2 and 8, g -0.7, 0 and 0.7; two
-// dielectric spheres (ior 1.4). None of the shipped scenes is among them.
+// The calibration set (67 scenes), lit from the front: constant-density spheres at albedo 0.6,
+// 0.9, 0.99, tau 1, 4, 16, g -0.7, 0 and 0.7; boxes of noise density at albedo 0.6, 0.9, 0.99,
+// tau 2 and 8 (and two at g -0.7 and 0.7); noise-density spheres at albedo 0.9, tau 2 and 8,
+// g -0.7, 0 and 0.7; two dielectric spheres (ior 1.4). And twins of 12 of them lit from the
+// side and from behind: constant spheres at albedo 0.9, tau 1, 4, 16 and albedo 0.99, tau 4, 16,
+// and at albedo 0.9, tau 4, g 0.7 and -0.7; noise spheres at tau 2 and 8, and tau 8 at g -0.7;
+// the noise box at albedo 0.9, tau 8; the dielectric sphere at albedo 0.9. None of the shipped
+// scenes is among them.
 std::vector<NamedScene> calibration_scenes(const CalibrateOptions& o);
 
 int run_calibration(const CalibrateOptions& o);

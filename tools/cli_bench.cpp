@@ -1,6 +1,7 @@
 // scatterd bench SCENE.json --pipeline NAME [--terms T] --sweep key=v1,v2,... [--set k=v ...]
 //                [--reference FILE.exr] [--reference-spp N] [--frames N] --csv OUT.csv
-// scatterd bench --calibrate TABLE.json [--quick] [--size N] [--voxels N] [SCENE.json ...]
+// scatterd bench --calibrate TABLE.json [--quick] [--reuse] [--size N] [--voxels N] [SCENE.json
+// ...]
 //
 // --calibrate writes the budget planner's calibration table (tools/calibrate.hpp); with scene
 // files it measures those instead of the calibration set (the Pareto plot's figures).
@@ -220,6 +221,9 @@ Handler add_bench_command(CLI::App& app) {
   cmd->add_option("--calibrate", c->out,
                   "Write the budget planner's calibration table here (its version + 1)");
   cmd->add_flag("--quick", c->quick, "--calibrate: two scenes, to try it");
+  cmd->add_flag("--reuse", c->reuse,
+                "--calibrate: keep the rows of the scenes the table already holds (by name), "
+                "render only the others");
   cmd->add_option("--size", c->size, "--calibrate: image side")->capture_default_str();
   cmd->add_option("--voxels", c->voxels, "--calibrate: voxels on the long side")
       ->capture_default_str();

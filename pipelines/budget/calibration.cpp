@@ -75,6 +75,7 @@ CalibrationTable CalibrationTable::from_json(const nlohmann::json& j) {
     c.ms = e.value("ms", std::map<std::string, double>{});
     c.noise = e.value("noise", 0.0);
     c.reference_noise = e.value("reference_noise", 0.0);
+    c.twin = e.value("twin", "");
     t.entries.push_back(std::move(c));
   }
   return t;
@@ -82,13 +83,15 @@ CalibrationTable CalibrationTable::from_json(const nlohmann::json& j) {
 
 nlohmann::json CalibrationTable::to_json() const {
   nlohmann::json rows = nlohmann::json::array();
-  for (const CalibrationEntry& e : entries)
+  for (const CalibrationEntry& e : entries) {
     rows.push_back({{"scene", e.scene},
                     {"class", e.cls},
                     {"error", e.error},
                     {"ms", e.ms},
                     {"noise", e.noise},
                     {"reference_noise", e.reference_noise}});
+    if (!e.twin.empty()) rows.back()["twin"] = e.twin;
+  }
   return {{"format", kFormat}, {"version", version}, {"command", command},
           {"width", width},    {"height", height},   {"entries", rows}};
 }
@@ -109,23 +112,29 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
     double distance, value;
     const CalibrationEntry* entry;
   };
+  // What an entry of the scene's kind (terms, homogeneous, index matched) measured of `what`.
+  auto value_of = [&](const CalibrationEntry& e) -> std::optional<double> {
+    if (e.cls.terms != c.terms || e.cls.homogeneous != c.homogeneous ||
+        e.cls.index_matched != c.index_matched)
+      return std::nullopt;
+    if (noise) return e.noise > 0 ? std::optional<double>(e.noise) : std::nullopt;
+    auto it = e.error.find(what);
+    return it == e.error.end() ? std::nullopt : std::optional<double>(it->second);
+  };
+  // The grid: the entries lit as the calibration lights them (no twin), from `front`, the most
+  // frontal facing among them. The others are twins of grid entries lit from further round.
+  double front = -2;
+  for (const CalibrationEntry& e : entries)
+    if (e.twin.empty() && value_of(e)) front = std::max(front, e.cls.facing);
+  auto is_front = [](const CalibrationEntry& e) { return e.twin.empty(); };
   std::vector<Near> near;
   double lo[SceneClass::kFeatures], hi[SceneClass::kFeatures];
   std::fill(lo, lo + SceneClass::kFeatures, 1e300);
   std::fill(hi, hi + SceneClass::kFeatures, -1e300);
   for (const CalibrationEntry& e : entries) {
-    if (e.cls.terms != c.terms || e.cls.homogeneous != c.homogeneous ||
-        e.cls.index_matched != c.index_matched)
-      continue;
-    double value;
-    if (noise) {
-      if (e.noise <= 0) continue;
-      value = e.noise;
-    } else {
-      auto it = e.error.find(what);
-      if (it == e.error.end()) continue;
-      value = it->second;
-    }
+    auto v = value_of(e);
+    if (!v || !is_front(e)) continue;
+    const double value = *v;
     double d2 = 0;
     for (int i = 0; i < SceneClass::kFeatures; ++i) {
       double f = e.cls.feature(i);
@@ -199,6 +208,67 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
     p.inside = false;
     p.value *= factor;
     p.note = outside + " (x" + short_number(factor) + ", conservative); " + p.note;
+  }
+  if (c.facing < front - kFacingTolerance) {
+    // Lit from further round than the grid: the front prediction times how much the error grew
+    // from a front entry to its twin lit from there (the same class but the facing). Per facing
+    // the calibration lights from, the worst ratio over the kind's pairs; between them linear in
+    // the facing, from 1 at the front; never less than at a facing further to the front.
+    struct Level {
+      double facing, ratio;
+      int pairs;
+    };
+    std::vector<Level> levels{{front, 1.0, 0}};
+    // Below a tenth of a percent an error's ratio says nothing (the marcher's 0 at both).
+    const double floor = noise ? 0.0 : 1e-3;
+    for (const CalibrationEntry& lit : entries) {
+      auto v = value_of(lit);
+      if (!v || is_front(lit)) continue;
+      for (const CalibrationEntry& twin : entries) {
+        auto b = value_of(twin);
+        if (!b || twin.scene != lit.twin || twin.cls.terms != lit.cls.terms || *b + floor <= 0)
+          continue;
+        const double ratio = std::max(1.0, (*v + floor) / (*b + floor));
+        auto level = std::find_if(levels.begin(), levels.end(), [&](const Level& l) {
+          return std::abs(l.facing - lit.cls.facing) < 0.1;
+        });
+        if (level == levels.end()) {
+          levels.push_back({lit.cls.facing, ratio, 1});
+        } else {
+          level->ratio = std::max(level->ratio, ratio);
+          ++level->pairs;
+        }
+        break;
+      }
+    }
+    if (levels.size() > 1) {
+      std::sort(levels.begin(), levels.end(),
+                [](const Level& a, const Level& b) { return a.facing > b.facing; });
+      int pairs = 0;
+      for (size_t i = 1; i < levels.size(); ++i) {
+        levels[i].ratio = std::max(levels[i].ratio, levels[i - 1].ratio);
+        pairs += levels[i].pairs;
+      }
+      double ratio = levels.back().ratio;
+      bool beyond = c.facing < levels.back().facing - kFacingTolerance;
+      for (size_t i = 1; i < levels.size(); ++i)
+        if (c.facing >= levels[i].facing) {
+          const Level &a = levels[i - 1], &b = levels[i];
+          ratio = b.ratio + (a.ratio - b.ratio) * (c.facing - b.facing) / (a.facing - b.facing);
+          break;
+        }
+      std::string note = "lit from facing " + short_number(c.facing) + ", the calibration's " +
+                         short_number(front) + ": x" + short_number(ratio) + " (the worst of " +
+                         std::to_string(pairs) + " pairs lit from further round)";
+      if (beyond) {
+        ratio *= outside_factor;
+        p.inside = false;
+        note +=
+            ", further round than calibrated (x" + short_number(outside_factor) + ", conservative)";
+      }
+      p.value *= ratio;
+      p.note = note + "; " + p.note;
+    }
   }
   return p;
 }

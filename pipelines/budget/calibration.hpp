@@ -43,6 +43,9 @@ struct CalibrationEntry {
   // standard error at n samples per pixel is noise / sqrt(n). 0 when not measured.
   double noise = 0;
   double reference_noise = 0;  // the noise of the reference these errors were measured against
+  // The grid's scene this one is a twin of, lit from further round (SceneClass::facing); empty
+  // for the grid's own, lit from the front.
+  std::string twin;
 };
 
 class CalibrationTable {
@@ -59,10 +62,14 @@ class CalibrationTable {
   std::vector<CalibrationEntry> entries;
 
   // What the table says of `way` for a scene of class `c`, among the calibration scenes of the
-  // same kind (terms, homogeneous, index matched) that measured it: the worst error in the grid
-  // cell around the scene (per feature, the calibrated values bracketing it; the two nearest
-  // where the cell holds none), doubled when the scene lies outside the range they span. Nothing
-  // when no scene of its kind measured the way.
+  // same kind (terms, homogeneous, index matched) that measured it, lit from the front (the
+  // most frontal facing among them): the worst error in the grid cell around the scene (per
+  // feature, the calibrated values bracketing it; the two nearest where the cell holds none),
+  // doubled when the scene lies outside the range they span. A scene lit from further round
+  // (a facing below the front's) takes the worst ratio of a pair's error lit from there to its
+  // front twin's, linear in the facing between the facings calibrated (1 at the front), and
+  // doubled further round than the last; a kind with no such pairs takes none (a table from
+  // before the facing). Nothing when no scene of its kind measured the way.
   struct Prediction {
     double value = 0;
     bool inside = true;
@@ -80,6 +87,8 @@ class CalibrationTable {
  private:
   std::optional<Prediction> predict(const SceneClass& c, const std::string& what, bool noise,
                                     double outside_factor) const;
+  // A scene's facing this close to the grid's counts as lit the same way.
+  static constexpr double kFacingTolerance = 0.05;
 };
 
 // sqrt(4 pi * integral of p^2) of the Henyey-Greenstein phase function at g: how much the path

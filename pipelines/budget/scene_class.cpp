@@ -55,10 +55,25 @@ SceneClass classify(const Scene& scene, Terms terms) {
   double extent =
       std::cbrt(std::max(size.x, 1e-9) * std::max(size.y, 1e-9) * std::max(size.z, 1e-9));
   c.tau = sigma_t / 3 * density * extent;
-  for (const Light& l : scene.lights)
-    if (l.type != Light::Type::Directional &&
-        length(l.position - b.center()) <= length(size) / 2 * 1.05)
+  const Vec3 view = normalize(scene.camera.position - b.center());
+  double weight = 0, facing = 0;
+  for (const Light& l : scene.lights) {
+    const double power = l.intensity * (l.color.x + l.color.y + l.color.z) / 3;
+    if (l.type == Light::Type::Directional) {
+      weight += power;
+      facing += power * dot(normalize(-l.direction), view);
+      continue;
+    }
+    const Vec3 to = l.position - b.center();
+    if (length(to) <= length(size) / 2 * 1.05) {
       c.light_inside = true;
+      continue;
+    }
+    const double w = power / dot(to, to);
+    weight += w;
+    facing += w * dot(normalize(to), view);
+  }
+  if (weight > 0) c.facing = facing / weight;
   return c;
 }
 
@@ -66,7 +81,10 @@ std::string describe(const SceneClass& c) {
   return std::string(c.homogeneous ? "homogeneous" : "inhomogeneous") +
          (c.index_matched ? ", index matched" : ", dielectric") + ", albedo " +
          short_number(c.albedo) + ", tau " + short_number(c.tau) + ", g " + short_number(c.g) +
-         (c.light_inside ? ", a light inside" : "");
+         (c.light_inside ? ", a light inside" : "") +
+         (c.facing < 0.5 ? ", lit from " + std::string(c.facing < -0.3 ? "behind" : "the side") +
+                               " (facing " + short_number(c.facing) + ")"
+                         : "");
 }
 
 void to_json(nlohmann::json& j, const SceneClass& c) {
@@ -76,7 +94,8 @@ void to_json(nlohmann::json& j, const SceneClass& c) {
        {"albedo", c.albedo},
        {"tau", c.tau},
        {"g", c.g},
-       {"light_inside", c.light_inside}};
+       {"light_inside", c.light_inside},
+       {"facing", c.facing}};
 }
 
 void from_json(const nlohmann::json& j, SceneClass& c) {
@@ -87,6 +106,7 @@ void from_json(const nlohmann::json& j, SceneClass& c) {
   c.tau = j.at("tau").get<double>();
   c.g = j.at("g").get<double>();
   c.light_inside = j.value("light_inside", false);
+  c.facing = j.value("facing", 1.0);
 }
 
 }  // namespace scatter

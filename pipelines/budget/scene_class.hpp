@@ -21,6 +21,13 @@ struct SceneClass {
   // The largest density over the smallest (> 0) on the same lattice as tau's; 1 for a constant
   // field. Not a calibration feature: it marks what psf's multiple term cannot render.
   double contrast = 1;
+  // Where the lights stand seen from the camera: the cosine between the directions from the
+  // object's centre to each light and to the camera, averaged with each light's irradiance at the
+  // centre as its weight (lights inside the object left out): 1 lit from the camera's side, 0
+  // from the side, -1 from behind. Not a grid feature: the calibration measures pairs lit from the
+  // calibration's front and from further round, and the planner scales a prediction by their
+  // ratio (CalibrationTable::predict_error).
+  double facing = 1;
 
   // The continuous features, scaled so that one unit is about one step of the calibration grid:
   // log2(tau) / 2, -log10(1 - albedo) and g / kGStep.

@@ -62,6 +62,35 @@ TEST(SceneClass, ReadsTheMediumAndTheObjectsOpticalSize) {
   EXPECT_TRUE(classify(s, Terms::All).light_inside);
 }
 
+// The lights' facing: the cosine between the directions from the object's centre to a light and
+// to the camera, averaged with the irradiance at the centre as weights.
+TEST(SceneClass, SaysFromWhereTheLightsShine) {
+  Scene s = sphere_scene(0.9, 4, 0);  // light at (3, 3, 3), camera at (0, 0, 4)
+  EXPECT_NEAR(classify(s, Terms::All).facing, 1 / std::sqrt(3.0), 1e-9);
+  s.lights[0].position = {0, 0, -5};
+  EXPECT_NEAR(classify(s, Terms::All).facing, -1, 1e-9);
+  Light front = s.lights[0];
+  front.position = {0, 0, 5};
+  front.intensity = s.lights[0].intensity / 3;
+  s.lights.push_back(front);  // a third of the irradiance from the front
+  EXPECT_NEAR(classify(s, Terms::All).facing, -0.5, 1e-9);
+  Light inside = front;
+  inside.position = {0.1, 0, 0};
+  inside.intensity = 1e6;
+  s.lights.push_back(inside);  // left out
+  EXPECT_NEAR(classify(s, Terms::All).facing, -0.5, 1e-9);
+  Light sun;
+  sun.type = Light::Type::Directional;
+  sun.direction = {0, 0, -1};  // travels away from the camera: lights the side it sees
+  s.lights = {sun};
+  EXPECT_NEAR(classify(s, Terms::All).facing, 1, 1e-9);
+  EXPECT_EQ(describe(classify(s, Terms::All)).find("lit from"), std::string::npos);
+  s.lights[0].direction = {1, 0, 0};
+  EXPECT_NE(describe(classify(s, Terms::All)).find("lit from the side (facing 0)"),
+            std::string::npos)
+      << describe(classify(s, Terms::All));
+}
+
 TEST(Way, ParsesOneOrTwoParts) {
   Way w = Way::parse("thickness:normal+lbl:draft", Terms::All);
   ASSERT_EQ(w.parts.size(), 2u);
@@ -132,10 +161,63 @@ TEST(CalibrationTable, TheNoisePastTheCalibratedGGrowsWithThePhaseSpread) {
   EXPECT_DOUBLE_EQ(t.predict_error(c, "lbl:normal")->value, 0.16);
 }
 
+// A scene lit from further round than the grid takes the worst ratio of a twin's error lit from
+// there to its front entry's, linear in the facing from 1 at the front, never less further round,
+// and doubled beyond the last facing calibrated; the twins never stand in for the front grid.
+TEST(CalibrationTable, ScalesAPredictionLitFromFurtherRoundByItsTwinsRatio) {
+  CalibrationTable t = table();
+  for (CalibrationEntry& e : t.entries) e.cls.facing = 0.8;
+  SceneClass c = classify(sphere_scene(0.9, 4, 0), Terms::All);
+  c.facing = -0.3;
+  // No twins: a table from before the facing predicts as before.
+  EXPECT_DOUBLE_EQ(t.predict_error(c, "lbl:normal")->value, 0.08);
+  auto twin = [&](size_t i, double facing, double lbl, double noise) {
+    CalibrationEntry e = t.entries.at(i);
+    e.twin = e.scene;
+    e.scene += facing > 0 ? "-side" : "-behind";
+    e.cls.facing = facing;
+    e.error = {{"lbl:normal", lbl}};
+    e.noise = noise;
+    t.entries.push_back(e);
+  };
+  twin(3, 0.05, 0.16, 3.2);  // thick: lbl 0.08 -> 0.16, noise 1.6 -> 3.2
+  twin(2, 0.05, 0.06, 0.8);  // thin: 0.04 -> 0.06
+  twin(3, -0.6, 0.12, 4.8);  // thick from behind: less than from the side, so the side's
+  const double side = (0.16 + 1e-3) / (0.08 + 1e-3);  // a tenth of a percent added to both
+  c.facing = 0.8;
+  auto p = t.predict_error(c, "lbl:normal");
+  EXPECT_DOUBLE_EQ(p->value, 0.08);  // the front grid, not the twins' larger errors
+  EXPECT_TRUE(p->inside);
+  c.facing = 0.425;  // half way round to the side
+  p = t.predict_error(c, "lbl:normal");
+  EXPECT_NEAR(p->value, 0.08 * (1 + (side - 1) / 2), 1e-9);
+  EXPECT_TRUE(p->inside);
+  EXPECT_NE(p->note.find("lit from facing 0.425"), std::string::npos) << p->note;
+  c.facing = -0.3;
+  EXPECT_NEAR(t.predict_error(c, "lbl:normal")->value, 0.08 * side, 1e-9);
+  c.facing = -0.9;
+  p = t.predict_error(c, "lbl:normal");
+  EXPECT_NEAR(p->value, 0.08 * side * 2, 1e-9);
+  EXPECT_FALSE(p->inside);
+  EXPECT_NE(p->note.find("further round than calibrated"), std::string::npos) << p->note;
+  // The noise the same way: 2x at the side, 3x behind.
+  c.facing = 0.05;
+  EXPECT_NEAR(t.predict_noise(c)->value, 1.6 * 2, 1e-9);
+  c.facing = -0.6;
+  EXPECT_NEAR(t.predict_noise(c)->value, 1.6 * 3, 1e-9);
+  // A way no twin measured takes no ratio.
+  EXPECT_DOUBLE_EQ(t.predict_error(c, "psf:normal")->value, 0.40);
+}
+
 TEST(CalibrationTable, RoundTripsThroughJson) {
   CalibrationTable t = table();
+  t.entries[1].cls.facing = -0.4;
+  t.entries[1].twin = "thin";
   CalibrationTable back = CalibrationTable::from_json(t.to_json());
   ASSERT_EQ(back.entries.size(), t.entries.size());
+  EXPECT_EQ(back.entries[1].cls.facing, -0.4);
+  EXPECT_EQ(back.entries[1].twin, "thin");
+  EXPECT_EQ(back.entries[0].twin, "");
   EXPECT_EQ(back.entries[2].error, t.entries[2].error);
   EXPECT_EQ(back.entries[3].noise, 1.6);
   nlohmann::json wrong = t.to_json();
