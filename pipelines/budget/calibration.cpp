@@ -104,14 +104,69 @@ std::vector<std::string> CalibrationTable::ways(Terms terms) const {
   return {seen.begin(), seen.end()};
 }
 
+namespace {
+
+// A calibrated value at a class's features.
+struct Point {
+  const CalibrationEntry* entry;
+  double value;
+};
+
+struct Cell {
+  double value = 0;
+  std::string note;
+};
+
+// The calibration grid's cell around `c`: per feature, the nearest calibrated values at or below
+// and at or above it. The worst of the points in that cell (the error need not be monotone in any
+// one feature, but is bounded by its corners better than by its nearest neighbour); with none
+// there, the worse of the two nearest. `points` is not empty.
+Cell worst_in_cell(std::vector<Point> points, const SceneClass& c) {
+  auto distance = [&](const Point& p) {
+    double d2 = 0;
+    for (int i = 0; i < SceneClass::kFeatures; ++i)
+      d2 += std::pow(p.entry->cls.feature(i) - c.feature(i), 2);
+    return d2;
+  };
+  std::sort(points.begin(), points.end(),
+            [&](const Point& a, const Point& b) { return distance(a) < distance(b); });
+  double below[SceneClass::kFeatures], above[SceneClass::kFeatures];
+  for (int i = 0; i < SceneClass::kFeatures; ++i) {
+    below[i] = -1e300;
+    above[i] = 1e300;
+    for (const Point& n : points) {
+      double f = n.entry->cls.feature(i), x = c.feature(i);
+      if (f <= x + 1e-9) below[i] = std::max(below[i], f);
+      if (f >= x - 1e-9) above[i] = std::min(above[i], f);
+    }
+  }
+  Cell cell;
+  int in_cell = 0;
+  for (const Point& n : points) {
+    bool inside = true;
+    for (int i = 0; i < SceneClass::kFeatures; ++i) {
+      double f = n.entry->cls.feature(i);
+      inside = inside && f >= below[i] - 1e-9 && f <= above[i] + 1e-9;
+    }
+    if (!inside) continue;
+    if (n.value >= cell.value) cell.note = "the worst of its calibration cell: " + n.entry->scene;
+    cell.value = std::max(cell.value, n.value);
+    ++in_cell;
+  }
+  if (in_cell == 0) {
+    size_t k = std::min<size_t>(2, points.size());
+    for (size_t i = 0; i < k; ++i) cell.value = std::max(cell.value, points[i].value);
+    cell.note = "from " + points[0].entry->scene + (k > 1 ? " and " + points[1].entry->scene : "");
+  }
+  return cell;
+}
+
+}  // namespace
+
 std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const SceneClass& c,
                                                                       const std::string& what,
                                                                       bool noise,
                                                                       double outside_factor) const {
-  struct Near {
-    double distance, value;
-    const CalibrationEntry* entry;
-  };
   // What an entry of the scene's kind (terms, homogeneous, index matched) measured of `what`.
   auto value_of = [&](const CalibrationEntry& e) -> std::optional<double> {
     if (e.cls.terms != c.terms || e.cls.homogeneous != c.homogeneous ||
@@ -127,57 +182,25 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
   for (const CalibrationEntry& e : entries)
     if (e.twin.empty() && value_of(e)) front = std::max(front, e.cls.facing);
   auto is_front = [](const CalibrationEntry& e) { return e.twin.empty(); };
-  std::vector<Near> near;
+  std::vector<Point> grid;
   double lo[SceneClass::kFeatures], hi[SceneClass::kFeatures];
   std::fill(lo, lo + SceneClass::kFeatures, 1e300);
   std::fill(hi, hi + SceneClass::kFeatures, -1e300);
   for (const CalibrationEntry& e : entries) {
     auto v = value_of(e);
     if (!v || !is_front(e)) continue;
-    const double value = *v;
-    double d2 = 0;
     for (int i = 0; i < SceneClass::kFeatures; ++i) {
-      double f = e.cls.feature(i);
-      d2 += (f - c.feature(i)) * (f - c.feature(i));
-      lo[i] = std::min(lo[i], f);
-      hi[i] = std::max(hi[i], f);
+      lo[i] = std::min(lo[i], e.cls.feature(i));
+      hi[i] = std::max(hi[i], e.cls.feature(i));
     }
-    near.push_back({std::sqrt(d2), value, &e});
+    grid.push_back({&e, *v});
   }
-  if (near.empty()) return std::nullopt;
-  std::sort(near.begin(), near.end(),
-            [](const Near& a, const Near& b) { return a.distance < b.distance; });
+  if (grid.empty()) return std::nullopt;
   Prediction p;
-  // The calibration grid's cell around the scene: per feature, the nearest calibrated values at
-  // or below and at or above it. The prediction is the worst of the scenes in that cell (the
-  // error need not be monotone in any one feature, but is bounded by its corners better than by
-  // its nearest neighbour); with none there, the worse of the two nearest.
-  double below[SceneClass::kFeatures], above[SceneClass::kFeatures];
-  for (int i = 0; i < SceneClass::kFeatures; ++i) {
-    below[i] = -1e300;
-    above[i] = 1e300;
-    for (const Near& n : near) {
-      double f = n.entry->cls.feature(i), x = c.feature(i);
-      if (f <= x + 1e-9) below[i] = std::max(below[i], f);
-      if (f >= x - 1e-9) above[i] = std::min(above[i], f);
-    }
-  }
-  int in_cell = 0;
-  for (const Near& n : near) {
-    bool inside = true;
-    for (int i = 0; i < SceneClass::kFeatures; ++i) {
-      double f = n.entry->cls.feature(i);
-      inside = inside && f >= below[i] - 1e-9 && f <= above[i] + 1e-9;
-    }
-    if (!inside) continue;
-    if (n.value >= p.value) p.note = "the worst of its calibration cell: " + n.entry->scene;
-    p.value = std::max(p.value, n.value);
-    ++in_cell;
-  }
-  if (in_cell == 0) {
-    size_t k = std::min<size_t>(2, near.size());
-    for (size_t i = 0; i < k; ++i) p.value = std::max(p.value, near[i].value);
-    p.note = "from " + near[0].entry->scene + (k > 1 ? " and " + near[1].entry->scene : "");
+  {
+    Cell cell = worst_in_cell(grid, c);
+    p.value = cell.value;
+    p.note = cell.note;
   }
   std::string outside;
   double spread = 1;      // the noise's growth past the calibrated g
@@ -211,14 +234,16 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
   }
   if (c.facing < front - kFacingTolerance) {
     // Lit from further round than the grid: the front prediction times how much the error grew
-    // from a front entry to its twin lit from there (the same class but the facing). Per facing
-    // the calibration lights from, the worst ratio over the kind's pairs; between them linear in
-    // the facing, from 1 at the front; never less than at a facing further to the front.
+    // from a grid scene to its twin lit from there (the same class but the facing). Per facing
+    // the calibration lights from, the ratio at the scene's class is the worst in its cell of the
+    // twins' ratios (as the grid's errors are, worst_in_cell); between those facings linear, from
+    // 1 at the front; never less than at a facing nearer the front.
     struct Level {
-      double facing, ratio;
-      int pairs;
+      double facing;
+      std::vector<Point> ratios;
+      Cell at;
     };
-    std::vector<Level> levels{{front, 1.0, 0}};
+    std::vector<Level> levels;
     // Below a tenth of a percent an error's ratio says nothing (the marcher's 0 at both).
     const double floor = noise ? 0.0 : 1e-3;
     for (const CalibrationEntry& lit : entries) {
@@ -233,34 +258,36 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
           return std::abs(l.facing - lit.cls.facing) < 0.1;
         });
         if (level == levels.end()) {
-          levels.push_back({lit.cls.facing, ratio, 1});
-        } else {
-          level->ratio = std::max(level->ratio, ratio);
-          ++level->pairs;
+          levels.push_back(Level{lit.cls.facing, {}, {}});
+          level = levels.end() - 1;
         }
+        level->ratios.push_back({&lit, ratio});
         break;
       }
     }
-    if (levels.size() > 1) {
+    if (!levels.empty()) {
       std::sort(levels.begin(), levels.end(),
                 [](const Level& a, const Level& b) { return a.facing > b.facing; });
-      int pairs = 0;
+      levels.insert(levels.begin(), Level{front, {}, Cell{1.0, ""}});
       for (size_t i = 1; i < levels.size(); ++i) {
-        levels[i].ratio = std::max(levels[i].ratio, levels[i - 1].ratio);
-        pairs += levels[i].pairs;
+        levels[i].at = worst_in_cell(levels[i].ratios, c);
+        levels[i].at.value = std::max(levels[i].at.value, levels[i - 1].at.value);
       }
-      double ratio = levels.back().ratio;
-      bool beyond = c.facing < levels.back().facing - kFacingTolerance;
+      const Level& last = levels.back();
+      double ratio = last.at.value;
+      std::string from = last.at.note;
       for (size_t i = 1; i < levels.size(); ++i)
         if (c.facing >= levels[i].facing) {
           const Level &a = levels[i - 1], &b = levels[i];
-          ratio = b.ratio + (a.ratio - b.ratio) * (c.facing - b.facing) / (a.facing - b.facing);
+          ratio = b.at.value +
+                  (a.at.value - b.at.value) * (c.facing - b.facing) / (a.facing - b.facing);
+          from = b.at.note;
           break;
         }
       std::string note = "lit from facing " + short_number(c.facing) + ", the calibration's " +
-                         short_number(front) + ": x" + short_number(ratio) + " (the worst of " +
-                         std::to_string(pairs) + " pairs lit from further round)";
-      if (beyond) {
+                         short_number(front) + ": x" + short_number(ratio) +
+                         " (its twins lit from further round: " + from + ")";
+      if (c.facing < last.facing - kFacingTolerance) {
         ratio *= outside_factor;
         p.inside = false;
         note +=

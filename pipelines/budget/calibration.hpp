@@ -66,10 +66,11 @@ class CalibrationTable {
   // most frontal facing among them): the worst error in the grid cell around the scene (per
   // feature, the calibrated values bracketing it; the two nearest where the cell holds none),
   // doubled when the scene lies outside the range they span. A scene lit from further round
-  // (a facing below the front's) takes the worst ratio of a pair's error lit from there to its
-  // front twin's, linear in the facing between the facings calibrated (1 at the front), and
-  // doubled further round than the last; a kind with no such pairs takes none (a table from
-  // before the facing). Nothing when no scene of its kind measured the way.
+  // (a facing below the front's) takes, per facing the twins are lit from, the ratio of a twin's
+  // error to its grid scene's (the worst in the scene's cell, as for the errors), linear in the
+  // facing between those facings (1 at the front), and doubled further round than the last; a
+  // kind with no twins takes none (a table from before the facing). Nothing when no scene of
+  // its kind measured the way.
   struct Prediction {
     double value = 0;
     bool inside = true;
@@ -77,9 +78,10 @@ class CalibrationTable {
   };
   std::optional<Prediction> predict_error(const SceneClass& c, const std::string& way) const;
   // The reference's noise constant (see CalibrationEntry::noise) for the class, the same way
-  // (1.5x when outside; past the calibrated g, the ratio of phase_spread at g to that at the
-  // calibrated g nearest, to the power 1.5, where that is more: measured on a 24 x 24 sphere the
-  // noise went x3.5 from g -0.7 to -0.9 and x5.2 from 0.7 to 0.9, the spread x3.0).
+  // (the facing's ratio included; 1.5x when outside; past the calibrated g, the ratio of
+  // phase_spread at g to that at the calibrated g nearest, to the power 1.5, where that is more:
+  // measured on a 24 x 24 sphere the noise went x3.5 from g -0.7 to -0.9 and x5.2 from 0.7 to 0.9,
+  // the spread x3.0).
   std::optional<Prediction> predict_noise(const SceneClass& c) const;
   // The ways calibrated for `terms`, in a stable order.
   std::vector<std::string> ways(Terms terms) const;

@@ -161,9 +161,10 @@ TEST(CalibrationTable, TheNoisePastTheCalibratedGGrowsWithThePhaseSpread) {
   EXPECT_DOUBLE_EQ(t.predict_error(c, "lbl:normal")->value, 0.16);
 }
 
-// A scene lit from further round than the grid takes the worst ratio of a twin's error lit from
-// there to its front entry's, linear in the facing from 1 at the front, never less further round,
-// and doubled beyond the last facing calibrated; the twins never stand in for the front grid.
+// A scene lit from further round than the grid takes the ratio of the twins' errors lit from
+// there to their front entries' (the worst in its cell), linear in the facing from 1 at the
+// front, never less further round, and doubled beyond the last facing calibrated; the twins
+// never stand in for the front grid.
 TEST(CalibrationTable, ScalesAPredictionLitFromFurtherRoundByItsTwinsRatio) {
   CalibrationTable t = table();
   for (CalibrationEntry& e : t.entries) e.cls.facing = 0.8;
@@ -200,6 +201,12 @@ TEST(CalibrationTable, ScalesAPredictionLitFromFurtherRoundByItsTwinsRatio) {
   EXPECT_NEAR(p->value, 0.08 * side * 2, 1e-9);
   EXPECT_FALSE(p->inside);
   EXPECT_NE(p->note.find("further round than calibrated"), std::string::npos) << p->note;
+  // The twins' ratios are taken at the scene's class as the grid's errors are (the worst of its
+  // cell): at tau 2, the thin pair's alone.
+  c.tau = 2;
+  c.facing = 0.05;
+  EXPECT_NEAR(t.predict_error(c, "lbl:normal")->value, 0.04 * (0.061 / 0.041), 1e-9);
+  c.tau = 4;
   // The noise the same way: 2x at the side, 3x behind.
   c.facing = 0.05;
   EXPECT_NEAR(t.predict_noise(c)->value, 1.6 * 2, 1e-9);
