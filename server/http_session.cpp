@@ -90,8 +90,12 @@ constexpr uint32_t kHeaderLimit = 8 * 1024;
 }  // namespace
 
 HttpSession::HttpSession(tcp::socket&& socket, Api& api, boost::asio::thread_pool& workers,
-                         size_t body_limit)
-    : stream_(std::move(socket)), api_(api), workers_(workers), body_limit_(body_limit) {}
+                         size_t body_limit, std::atomic<int>& owed)
+    : stream_(std::move(socket)),
+      api_(api),
+      workers_(workers),
+      body_limit_(body_limit),
+      owed_(owed) {}
 
 void HttpSession::run() {
   boost::asio::dispatch(stream_.get_executor(),
@@ -143,6 +147,7 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
     }
   }
   cancel_ = std::make_shared<CancelToken>();
+  owing_.emplace(owed_);
   HttpRequest request{std::string(req.method_string()), std::string(req.target()),
                       std::move(req.body()), authorization(req), cancel_};
   unsigned version = req.version();
@@ -190,6 +195,7 @@ void HttpSession::on_watch(beast::error_code ec, size_t bytes) {
 }
 
 void HttpSession::send(http::response<http::string_body>&& response) {
+  if (!owing_) owing_.emplace(owed_);  // an answer to a request the parser refused
   response_ = std::make_shared<http::response<http::string_body>>(std::move(response));
   bool keep_alive = response_->keep_alive();
   stream_.expires_after(std::chrono::seconds(60));
@@ -199,6 +205,7 @@ void HttpSession::send(http::response<http::string_body>&& response) {
 }
 
 void HttpSession::on_write(bool keep_alive, beast::error_code ec, size_t) {
+  owing_.reset();  // written, or never will be
   if (ec) return fail(ec, "write");
   cancel_.reset();
   if (watching_) {  // one read at a time: the watch ends first, then on_watch comes back here

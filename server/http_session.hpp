@@ -7,10 +7,12 @@
 // cancels its render (bytes that arrive meanwhile, a pipelined request, are kept for the parser).
 #pragma once
 
+#include <atomic>
 #include <boost/asio.hpp>
 #include <boost/beast.hpp>
 #include <functional>
 #include <memory>
+#include <optional>
 
 #include "server/api.hpp"
 
@@ -22,7 +24,10 @@ using tcp = boost::asio::ip::tcp;
 
 class HttpSession : public std::enable_shared_from_this<HttpSession> {
  public:
-  HttpSession(tcp::socket&& socket, Api& api, boost::asio::thread_pool& workers, size_t body_limit);
+  // `owed` counts the requests read whose answer is not written yet, over every session: the
+  // server's stop waits for it to fall to 0 before it ends the I/O (Server::linger).
+  HttpSession(tcp::socket&& socket, Api& api, boost::asio::thread_pool& workers, size_t body_limit,
+              std::atomic<int>& owed);
   void run();
 
  private:
@@ -45,6 +50,16 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   std::shared_ptr<CancelToken> cancel_;  // the request being served
   bool watching_ = false;
   std::function<void()> after_watch_;  // what on_write would have done, once the watch has ended
+  // One count in `owed` while a request read is unanswered (released with the session too).
+  struct Owing {
+    std::atomic<int>* owed;
+    explicit Owing(std::atomic<int>& n) : owed(&n) { ++n; }
+    Owing(const Owing&) = delete;
+    Owing& operator=(const Owing&) = delete;
+    ~Owing() { --*owed; }
+  };
+  std::atomic<int>& owed_;
+  std::optional<Owing> owing_;
 };
 
 }  // namespace scatter::server

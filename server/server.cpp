@@ -58,21 +58,22 @@ bool Server::wait_stopped(std::chrono::milliseconds timeout) {
 }
 
 void Server::do_accept() {
-  acceptor_.async_accept(boost::asio::make_strand(io_), [this](boost::system::error_code ec,
-                                                               tcp::socket socket) {
-    if (ec) {
-      if (ec != boost::asio::error::operation_aborted && acceptor_.is_open())
-        spdlog::warn("event=accept_error error=\"{}\"", ec.message());
-    } else {
-      // A frame is a header then an image: without this, Nagle's algorithm holds the image
-      // until the client acknowledges the header (its delayed ack: ~40 ms a frame).
-      socket.set_option(tcp::no_delay(true), ec);
-      std::make_shared<HttpSession>(std::move(socket), api_, workers_, options_.max_upload_mb << 20)
-          ->run();
-    }
-    // Closed by stop() (on this strand): no next accept, which would fail on the closed socket.
-    if (acceptor_.is_open()) do_accept();
-  });
+  acceptor_.async_accept(
+      boost::asio::make_strand(io_), [this](boost::system::error_code ec, tcp::socket socket) {
+        if (ec) {
+          if (ec != boost::asio::error::operation_aborted && acceptor_.is_open())
+            spdlog::warn("event=accept_error error=\"{}\"", ec.message());
+        } else {
+          // A frame is a header then an image: without this, Nagle's algorithm holds the image
+          // until the client acknowledges the header (its delayed ack: ~40 ms a frame).
+          socket.set_option(tcp::no_delay(true), ec);
+          std::make_shared<HttpSession>(std::move(socket), api_, workers_,
+                                        options_.max_upload_mb << 20, answers_owed_)
+              ->run();
+        }
+        // Closed by stop() (on this strand): no next accept, which would fail on the closed socket.
+        if (acceptor_.is_open()) do_accept();
+      });
 }
 
 void Server::run(bool handle_signals) {
@@ -102,24 +103,30 @@ void Server::stop() {
   boost::asio::post(acceptor_.get_executor(), [this] {
     boost::system::error_code ec;
     acceptor_.close(ec);
-    linger(std::chrono::steady_clock::now() + kStopGrace);
+    linger(std::chrono::steady_clock::now() + kStopGrace, std::nullopt);
   });
 }
 
-void Server::linger(std::chrono::steady_clock::time_point deadline) {
+void Server::linger(std::chrono::steady_clock::time_point deadline,
+                    std::optional<std::chrono::steady_clock::time_point> answers_by) {
   // The I/O ends once the queues' threads are done (the running job has stopped at its check and
-  // answered "503: the server is stopping") or the grace is over, and a moment after, for those
-  // answers to reach their clients. Ending it at a fixed delay lost the answer of a job that
-  // stopped later (a loaded machine), leaving its client waiting on an open socket.
-  bool stopped = queue_.wait_stopped(std::chrono::milliseconds(0)) &&
-                 bake_queue_.wait_stopped(std::chrono::milliseconds(0));
-  if (stopped || std::chrono::steady_clock::now() >= deadline) {
+  // answered "503: the server is stopping") or the grace is over, then once every request read
+  // has its answer written (the answers go through the workers and the sessions' strands) or a
+  // grace after, and a moment after that, for the last bytes to leave. Ending it a fixed 250 ms
+  // after the queues stopped lost a 503 on a loaded machine, its client waiting on an open socket
+  // (ServiceTest.QuickRoutesAndValidationErrorsAnswerAtOnceWhileARenderRuns hung so).
+  const auto now = std::chrono::steady_clock::now();
+  const bool stopped = queue_.wait_stopped(std::chrono::milliseconds(0)) &&
+                       bake_queue_.wait_stopped(std::chrono::milliseconds(0));
+  if (!answers_by && (stopped || now >= deadline)) answers_by = now + kStopGrace;
+  if (answers_by && (answers_owed_ == 0 || now >= *answers_by)) {
     stop_timer_.expires_after(kStopLinger);
     stop_timer_.async_wait([this](boost::system::error_code) { io_.stop(); });
     return;
   }
   stop_timer_.expires_after(std::chrono::milliseconds(10));
-  stop_timer_.async_wait([this, deadline](boost::system::error_code) { linger(deadline); });
+  stop_timer_.async_wait(
+      [this, deadline, answers_by](boost::system::error_code) { linger(deadline, answers_by); });
 }
 
 }  // namespace scatter::server

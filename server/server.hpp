@@ -7,6 +7,7 @@
 #include <atomic>
 #include <boost/asio.hpp>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -37,7 +38,8 @@ class Server {
   // Serves until stop() (or SIGINT/SIGTERM when `handle_signals`).
   void run(bool handle_signals);
   // Stops accepting, drops queued renders and bakes, cancels the running ones, and ends run()
-  // once they have stopped and answered (or after kStopGrace, whichever comes first).
+  // once they have stopped (or after kStopGrace, whichever comes first) and every request read
+  // has its answer written (or kStopGrace after they stopped).
   void stop();
   static constexpr std::chrono::milliseconds kStopGrace{1000};
   // After run() returned: waits up to `timeout` for the render and bake threads to finish their
@@ -52,6 +54,9 @@ class Server {
   RenderQueue queue_, bake_queue_;
   Metrics metrics_;
   Api api_;
+  // Requests read and not answered yet, over the HTTP sessions (HttpSession): before io_, so
+  // that the sessions it destroys still find it.
+  std::atomic<int> answers_owed_{0};
   // After the Api: destroyed before it, with the sessions its unrun handlers hold (they give
   // their slots back to the Api). ~Server has stopped every thread that posts here by then.
   boost::asio::io_context io_;
@@ -59,7 +64,8 @@ class Server {
   boost::asio::steady_timer stop_timer_;
   std::atomic<bool> stopping_{false};  // stop() has run
   static constexpr std::chrono::milliseconds kStopLinger{250};
-  void linger(std::chrono::steady_clock::time_point deadline);
+  void linger(std::chrono::steady_clock::time_point deadline,
+              std::optional<std::chrono::steady_clock::time_point> answers_by);
   unsigned short port_ = 0;
 };
 
