@@ -236,22 +236,31 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
     // Lit from further round than the grid: the front prediction times how much the error grew
     // from a grid scene to its twin lit from there (the same class but the facing). Per facing
     // the calibration lights from, the ratio at the scene's class is the worst in its cell of the
-    // twins' ratios (as the grid's errors are, worst_in_cell); between those facings linear, from
-    // 1 at the front; never less than at a facing nearer the front.
+    // twins' ratios (as the grid's errors are, worst_in_cell), its excess over 1 doubled where
+    // the scene's tau or g lies outside the twins' (the ratios grow with both: x1.0 at tau 1 to
+    // x4.8 at 16 for psf behind; with albedo they change by under a tenth); between those facings
+    // linear, from 1 at the front; never less than at a facing nearer the front.
     struct Level {
       double facing;
       std::vector<Point> ratios;
       Cell at;
     };
     std::vector<Level> levels;
+    bool kind_has_twins = false;
     // Below a tenth of a percent an error's ratio says nothing (the marcher's 0 at both).
     const double floor = noise ? 0.0 : 1e-3;
     for (const CalibrationEntry& lit : entries) {
+      if (is_front(lit) || lit.cls.terms != c.terms || lit.cls.homogeneous != c.homogeneous ||
+          lit.cls.index_matched != c.index_matched)
+        continue;
+      kind_has_twins = true;
       auto v = value_of(lit);
-      if (!v || is_front(lit)) continue;
+      // A twin lit from the grid's side of the front is no twin (a hand-made table's).
+      if (!v || lit.cls.facing >= front - kFacingTolerance) continue;
       for (const CalibrationEntry& twin : entries) {
         auto b = value_of(twin);
-        if (!b || twin.scene != lit.twin || twin.cls.terms != lit.cls.terms || *b + floor <= 0)
+        if (!b || !is_front(twin) || twin.scene != lit.twin || twin.cls.terms != lit.cls.terms ||
+            *b + floor <= 0)
           continue;
         const double ratio = std::max(1.0, (*v + floor) / (*b + floor));
         auto level = std::find_if(levels.begin(), levels.end(), [&](const Level& l) {
@@ -265,16 +274,33 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
         break;
       }
     }
+    std::string note;
+    double ratio = 1;
     if (!levels.empty()) {
       std::sort(levels.begin(), levels.end(),
                 [](const Level& a, const Level& b) { return a.facing > b.facing; });
-      levels.insert(levels.begin(), Level{front, {}, Cell{1.0, ""}});
+      levels.insert(levels.begin(), Level{front, {}, Cell{1.0, "the front"}});
       for (size_t i = 1; i < levels.size(); ++i) {
-        levels[i].at = worst_in_cell(levels[i].ratios, c);
-        levels[i].at.value = std::max(levels[i].at.value, levels[i - 1].at.value);
+        Level& l = levels[i];
+        l.at = worst_in_cell(l.ratios, c);
+        std::string past;
+        for (int f : {0, 2}) {
+          double lo_f = 1e300, hi_f = -1e300;
+          for (const Point& r : l.ratios) {
+            lo_f = std::min(lo_f, r.entry->cls.feature(f));
+            hi_f = std::max(hi_f, r.entry->cls.feature(f));
+          }
+          if (c.feature(f) < lo_f - 0.05 || c.feature(f) > hi_f + 0.05)
+            past += std::string(past.empty() ? "" : " and ") + SceneClass::feature_name(f);
+        }
+        if (!past.empty()) {
+          l.at.value = 1 + (l.at.value - 1) * outside_factor;
+          l.at.note += ", its excess doubled: " + past + " outside its twins'";
+        }
+        if (levels[i - 1].at.value > l.at.value) l.at = levels[i - 1].at;
       }
       const Level& last = levels.back();
-      double ratio = last.at.value;
+      ratio = last.at.value;
       std::string from = last.at.note;
       for (size_t i = 1; i < levels.size(); ++i)
         if (c.facing >= levels[i].facing) {
@@ -284,15 +310,25 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
           from = b.at.note;
           break;
         }
-      std::string note = "lit from facing " + short_number(c.facing) + ", the calibration's " +
-                         short_number(front) + ": x" + short_number(ratio) +
-                         " (its twins lit from further round: " + from + ")";
+      note = "lit from facing " + short_number(c.facing) + ", the calibration's " +
+             short_number(front) + ": x" + short_number(ratio) +
+             " (its twins lit from further round: " + from + ")";
       if (c.facing < last.facing - kFacingTolerance) {
         ratio *= outside_factor;
         p.inside = false;
         note +=
             ", further round than calibrated (x" + short_number(outside_factor) + ", conservative)";
       }
+    } else if (kind_has_twins) {
+      // Twins of its kind were lit from further round, but none measured this: no evidence
+      // that it holds up there.
+      ratio = outside_factor;
+      p.inside = false;
+      note = "lit from facing " + short_number(c.facing) + ", the calibration's " +
+             short_number(front) + ": no twin lit from further round measured it (x" +
+             short_number(outside_factor) + ", conservative)";
+    }
+    if (!note.empty()) {
       p.value *= ratio;
       p.note = note + "; " + p.note;
     }

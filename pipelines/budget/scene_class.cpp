@@ -56,6 +56,11 @@ SceneClass classify(const Scene& scene, Terms terms) {
       std::cbrt(std::max(size.x, 1e-9) * std::max(size.y, 1e-9) * std::max(size.z, 1e-9));
   c.tau = sigma_t / 3 * density * extent;
   const Vec3 view = normalize(scene.camera.position - b.center());
+  // A camera inside the bounds sees the medium from within: no side is lit or dark to it, and
+  // the facing stays 1 (the calibration's front).
+  const Vec3 eye = scene.camera.position;
+  const bool camera_inside = eye.x >= b.lo.x && eye.x <= b.hi.x && eye.y >= b.lo.y &&
+                             eye.y <= b.hi.y && eye.z >= b.lo.z && eye.z <= b.hi.z;
   double weight = 0, facing = 0;
   for (const Light& l : scene.lights) {
     const double power = l.intensity * (l.color.x + l.color.y + l.color.z) / 3;
@@ -69,11 +74,18 @@ SceneClass classify(const Scene& scene, Terms terms) {
       c.light_inside = true;
       continue;
     }
-    const double w = power / dot(to, to);
+    double w = power / dot(to, to);
+    if (l.type == Light::Type::Spot) {
+      // Its cone toward the centre (smooth between the outer and inner angle, as it lights).
+      const double lo = std::cos(l.outer_deg * M_PI / 180), hi = std::cos(l.inner_deg * M_PI / 180);
+      const double t = std::clamp(
+          (dot(normalize(-to), normalize(l.direction)) - lo) / std::max(hi - lo, 1e-9), 0.0, 1.0);
+      w *= t * t * (3 - 2 * t);
+    }
     weight += w;
     facing += w * dot(normalize(to), view);
   }
-  if (weight > 0) c.facing = facing / weight;
+  if (weight > 0 && !camera_inside) c.facing = facing / weight;
   return c;
 }
 

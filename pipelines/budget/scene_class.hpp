@@ -23,8 +23,9 @@ struct SceneClass {
   double contrast = 1;
   // Where the lights stand seen from the camera: the cosine between the directions from the
   // object's centre to each light and to the camera, averaged with each light's irradiance at the
-  // centre as its weight (lights inside the object left out): 1 lit from the camera's side, 0
-  // from the side, -1 from behind. Not a grid feature: the calibration measures pairs lit from the
+  // centre as its weight (a spot's through its cone; lights inside the object's bounding sphere
+  // left out): 1 lit from the camera's side, 0 from the side, -1 from behind; 1 with the camera
+  // inside the object's bounds. Not a grid feature: the calibration measures pairs lit from the
   // calibration's front and from further round, and the planner scales a prediction by their
   // ratio (CalibrationTable::predict_error).
   double facing = 1;

@@ -79,6 +79,16 @@ TEST(SceneClass, SaysFromWhereTheLightsShine) {
   inside.intensity = 1e6;
   s.lights.push_back(inside);  // left out
   EXPECT_NEAR(classify(s, Terms::All).facing, -0.5, 1e-9);
+  Light spot = s.lights[0];  // behind, but turned away from the object: no weight
+  spot.type = Light::Type::Spot;
+  spot.direction = {0, 0, -1};
+  s.lights = {front, spot};
+  EXPECT_NEAR(classify(s, Terms::All).facing, 1, 1e-9);
+  s.lights[1].direction = {0, 0, 1};  // turned to it
+  EXPECT_LT(classify(s, Terms::All).facing, 0);
+  Scene within = s;
+  within.camera.position = {0.2, 0, 0};  // inside the bounds: no side is lit or dark to it
+  EXPECT_EQ(classify(within, Terms::All).facing, 1);
   Light sun;
   sun.type = Light::Type::Directional;
   sun.direction = {0, 0, -1};  // travels away from the camera: lights the side it sees
@@ -162,9 +172,10 @@ TEST(CalibrationTable, TheNoisePastTheCalibratedGGrowsWithThePhaseSpread) {
 }
 
 // A scene lit from further round than the grid takes the ratio of the twins' errors lit from
-// there to their front entries' (the worst in its cell), linear in the facing from 1 at the
-// front, never less further round, and doubled beyond the last facing calibrated; the twins
-// never stand in for the front grid.
+// there to their front entries' (the worst in its cell, its excess doubled past the twins' tau
+// or g), linear in the facing from 1 at the front, never less further round, and doubled beyond
+// the last facing calibrated; the twins never stand in for the front grid, and a way no twin of
+// its kind measured is doubled.
 TEST(CalibrationTable, ScalesAPredictionLitFromFurtherRoundByItsTwinsRatio) {
   CalibrationTable t = table();
   for (CalibrationEntry& e : t.entries) e.cls.facing = 0.8;
@@ -181,9 +192,11 @@ TEST(CalibrationTable, ScalesAPredictionLitFromFurtherRoundByItsTwinsRatio) {
     e.noise = noise;
     t.entries.push_back(e);
   };
-  twin(3, 0.05, 0.16, 3.2);  // thick: lbl 0.08 -> 0.16, noise 1.6 -> 3.2
-  twin(2, 0.05, 0.06, 0.8);  // thin: 0.04 -> 0.06
-  twin(3, -0.6, 0.12, 4.8);  // thick from behind: less than from the side, so the side's
+  twin(3, 0.05, 0.16, 3.2);  // thick (tau 8): lbl 0.08 -> 0.16, noise 1.6 -> 3.2
+  twin(2, 0.05, 0.06, 0.8);  // thin (tau 2): 0.04 -> 0.06
+  twin(3, -0.6, 0.12, 4.8);  // from behind: less than from the side, so the side's
+  twin(2, -0.6, 0.05, 1.6);
+  twin(3, 0.9, 1.0, 9.0);  // "lit" from the grid's side of the front: no twin
   const double side = (0.16 + 1e-3) / (0.08 + 1e-3);  // a tenth of a percent added to both
   c.facing = 0.8;
   auto p = t.predict_error(c, "lbl:normal");
@@ -195,25 +208,34 @@ TEST(CalibrationTable, ScalesAPredictionLitFromFurtherRoundByItsTwinsRatio) {
   EXPECT_TRUE(p->inside);
   EXPECT_NE(p->note.find("lit from facing 0.425"), std::string::npos) << p->note;
   c.facing = -0.3;
-  EXPECT_NEAR(t.predict_error(c, "lbl:normal")->value, 0.08 * side, 1e-9);
+  p = t.predict_error(c, "lbl:normal");
+  EXPECT_NEAR(p->value, 0.08 * side, 1e-9);
+  EXPECT_NE(p->note.find("thick-side"), std::string::npos) << p->note;  // where the ratio is from
   c.facing = -0.9;
   p = t.predict_error(c, "lbl:normal");
   EXPECT_NEAR(p->value, 0.08 * side * 2, 1e-9);
   EXPECT_FALSE(p->inside);
   EXPECT_NE(p->note.find("further round than calibrated"), std::string::npos) << p->note;
   // The twins' ratios are taken at the scene's class as the grid's errors are (the worst of its
-  // cell): at tau 2, the thin pair's alone.
+  // cell): at tau 2, the thin pair's alone; past their tau, the nearest's excess doubled.
   c.tau = 2;
   c.facing = 0.05;
   EXPECT_NEAR(t.predict_error(c, "lbl:normal")->value, 0.04 * (0.061 / 0.041), 1e-9);
+  c.tau = 64;  // outside the grid (x2) and the twins' tau
+  p = t.predict_error(c, "lbl:normal");
+  EXPECT_NEAR(p->value, 0.08 * 2 * (1 + (side - 1) * 2), 1e-9);
+  EXPECT_NE(p->note.find("tau outside its twins'"), std::string::npos) << p->note;
   c.tau = 4;
   // The noise the same way: 2x at the side, 3x behind.
-  c.facing = 0.05;
   EXPECT_NEAR(t.predict_noise(c)->value, 1.6 * 2, 1e-9);
   c.facing = -0.6;
   EXPECT_NEAR(t.predict_noise(c)->value, 1.6 * 3, 1e-9);
-  // A way no twin measured takes no ratio.
-  EXPECT_DOUBLE_EQ(t.predict_error(c, "psf:normal")->value, 0.40);
+  // A way no twin measured, where its kind has twins: doubled.
+  p = t.predict_error(c, "psf:normal");
+  EXPECT_DOUBLE_EQ(p->value, 0.40 * 2);
+  EXPECT_FALSE(p->inside);
+  EXPECT_NE(p->note.find("no twin lit from further round measured it"), std::string::npos)
+      << p->note;
 }
 
 TEST(CalibrationTable, RoundTripsThroughJson) {
