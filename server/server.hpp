@@ -39,7 +39,7 @@ class Server {
   void run(bool handle_signals);
   // Stops accepting, drops queued renders and bakes, cancels the running ones, and ends run()
   // once they have stopped (or after kStopGrace, whichever comes first) and every request read
-  // has its answer written (or kStopGrace after they stopped).
+  // has its answer written (or kStopGrace after that: at most 2 x kStopGrace, and a moment).
   void stop();
   static constexpr std::chrono::milliseconds kStopGrace{1000};
   // After run() returned: waits up to `timeout` for the render and bake threads to finish their

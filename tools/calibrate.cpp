@@ -233,9 +233,9 @@ int run_calibration(const CalibrateOptions& o) {
       }
     }
     const bool warm_up = !warm;
-    warm = true;
-    // A scene that cannot be measured (its reference black where the medium is, say) is left
-    // out with a message; the rest are measured and written.
+    // A scene that cannot be measured (its reference black where the medium is: the metric's
+    // std::invalid_argument) is left out with a message; the rest are measured and written.
+    // Anything else (the device lost, memory) ends the run and leaves the table as it was.
     try {
       auto mask = coverage_mask(scene, voxelize(scene, {.resolution = scene.voxels}));
       std::map<Terms, CalibrationEntry> entries;
@@ -296,7 +296,8 @@ int run_calibration(const CalibrateOptions& o) {
               entries[Terms::Single].ms[s] + entries[Terms::Multiple].ms[m];
         }
       for (auto& [t, e] : entries) table.entries.push_back(std::move(e));
-    } catch (const std::exception& e) {
+      warm = true;  // every way has rendered once, untimed
+    } catch (const std::invalid_argument& e) {
       std::cerr << "calibrate: " << n + 1 << "/" << scenes.size() << " " << name
                 << ": left out: " << e.what() << "\n";
       left_out.push_back(name);
@@ -307,9 +308,13 @@ int run_calibration(const CalibrateOptions& o) {
   }
   std::filesystem::path out(o.out);
   if (!out.parent_path().empty()) std::filesystem::create_directories(out.parent_path());
-  std::ofstream f(out);
-  f << table.to_json().dump(1) << "\n";
-  if (!f) throw std::runtime_error("cannot write " + o.out);
+  {
+    // Written beside it, then renamed over it: a failed write leaves the old table.
+    std::ofstream f(o.out + ".tmp");
+    f << table.to_json().dump(1) << "\n";
+    if (!f) throw std::runtime_error("cannot write " + o.out + ".tmp");
+  }
+  std::filesystem::rename(o.out + ".tmp", out);
   std::cout << "wrote " << o.out << " (version " << table.version << ", "
             << scenes.size() - left_out.size() << " scenes";
   for (size_t i = 0; i < left_out.size(); ++i)

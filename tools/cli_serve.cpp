@@ -49,7 +49,8 @@ int run_serve(ServeOptions o) {
             << std::endl;
   server.run(true);
   // Queued work was dropped and running work cancelled; run() waited up to Server::kStopGrace
-  // for it, so a pipeline step that cannot be interrupted does not hold the exit past that.
+  // for it (and as long again for the answers owed), so a pipeline step that cannot be
+  // interrupted does not hold the exit past that.
   if (!server.wait_stopped(std::chrono::milliseconds(0))) {
     spdlog::warn("event=stop_timeout grace_ms={} action=exit_without_waiting",
                  server::Server::kStopGrace.count());
