@@ -2,12 +2,15 @@
 #pragma once
 
 #include <boost/beast.hpp>
+#include <chrono>
 #include <string>
 
 namespace scatter::server::test_http {
 
 namespace beast = boost::beast;
 namespace http = beast::http;
+
+inline constexpr int kAnswerTimeoutS = 300;
 
 // A real HTTP client on loopback.
 inline http::response<http::string_body> request(unsigned short port, http::verb verb,
@@ -24,7 +27,13 @@ inline http::response<http::string_body> request(unsigned short port, http::verb
   beast::flat_buffer buffer;
   http::response_parser<http::string_body> parser;
   parser.body_limit(64 << 20);
-  http::read(stream, buffer, parser);
+  // With a deadline: a lost answer fails the test (the read throws) instead of hanging it; no
+  // answer in these tests takes minutes.
+  beast::error_code read;
+  stream.expires_after(std::chrono::seconds(kAnswerTimeoutS));
+  http::async_read(stream, buffer, parser, [&](beast::error_code e, size_t) { read = e; });
+  io.run();
+  if (read) throw beast::system_error(read);
   beast::error_code ec;
   stream.socket().shutdown(boost::asio::ip::tcp::socket::shutdown_both, ec);
   return parser.release();
