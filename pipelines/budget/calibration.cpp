@@ -258,10 +258,10 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
       // A twin lit from the grid's side of the front is no twin (a hand-made table's).
       if (!v || lit.cls.facing >= front - kFacingTolerance) continue;
       for (const CalibrationEntry& twin : entries) {
+        // Its name first: the way's error is looked up for the one twin only.
+        if (twin.scene != lit.twin || twin.cls.terms != lit.cls.terms || !is_front(twin)) continue;
         auto b = value_of(twin);
-        if (!b || !is_front(twin) || twin.scene != lit.twin || twin.cls.terms != lit.cls.terms ||
-            *b + floor <= 0)
-          continue;
+        if (!b || *b + floor <= 0) continue;
         const double ratio = std::max(1.0, (*v + floor) / (*b + floor));
         auto level = std::find_if(levels.begin(), levels.end(), [&](const Level& l) {
           return std::abs(l.facing - lit.cls.facing) < 0.1;
