@@ -10,7 +10,7 @@
 namespace scatter::test {
 
 inline CalibrationEntry entry(const std::string& name, Terms terms, double albedo, double tau,
-                       std::map<std::string, double> error, double noise = 0) {
+                              std::map<std::string, double> error, double noise = 0) {
   CalibrationEntry e;
   e.scene = name;
   e.cls.terms = terms;
