@@ -85,6 +85,17 @@ double relative_norm(const Image& e, const Image& ref) {
   return std::sqrt(num / den);
 }
 
+double error_scatter(const Image& std_error) {
+  double sum = 0, sum_sq = 0;
+  for (size_t p = 0; 3 * p + 2 < std_error.rgb.size(); ++p) {
+    double s = 0;
+    for (int c = 0; c < 3; ++c) s += double(std_error.rgb[3 * p + c]) * std_error.rgb[3 * p + c];
+    sum += s;
+    sum_sq += s * s;
+  }
+  return sum > 0 ? std::sqrt(2 * sum_sq) / sum : 0;
+}
+
 double relative_rmse(const Image& a, const Image& ref, const std::vector<uint8_t>& mask) {
   check_sizes(a, ref, mask);
   Image diff(a.width, a.height);

@@ -24,4 +24,12 @@ double relative_norm(const Image& e, const Image& ref, const std::vector<uint8_t
 // in both).
 double relative_norm(const Image& e, const Image& ref);
 
+// How far the squared error one image reaches scatters about its expectation, relative to it,
+// when each pixel's error is normal with standard deviation `std_error`:
+// sqrt(2 sum_p s_p^2) / sum_p s_p, s_p the pixel's squared standard errors summed over its
+// channels (one error for the three, the larger case: a grey medium's channels come from the
+// same paths). sqrt(2 / N) for N equally noisy pixels, sqrt(2) when one pixel carries all the
+// noise; 0 for an image without noise.
+double error_scatter(const Image& std_error);
+
 }  // namespace scatter

@@ -149,7 +149,7 @@ int run_bench(BenchOptions o) {
   std::ofstream csv(o.csv);
   if (!csv) throw std::runtime_error("cannot write " + o.csv);
   csv << "pipeline,scene,terms,width,height,key,value,bake_ms,frame_ms_median,frames,rel_rmse,"
-         "reference_noise,stage_ms_median\n";
+         "reference_noise,stage_ms_median,error_estimate\n";
   for (double v : sweep.values) {
     RenderRequest request{terms, base, nullptr};
     request.settings[sweep.key] = v;
@@ -186,7 +186,8 @@ int run_bench(BenchOptions o) {
     csv << (o.pipeline == "auto" ? last.plan.pipeline : o.pipeline) << ","
         << std::filesystem::path(o.scene).stem().string() << "," << o.terms << "," << scene.width
         << "," << scene.height << "," << sweep.key << "," << v << "," << bake_ms << "," << median
-        << "," << o.frames << "," << err << "," << ref.noise << "," << stage_ms << "\n";
+        << "," << o.frames << "," << err << "," << ref.noise << "," << stage_ms << ","
+        << (last.error_estimate ? std::to_string(*last.error_estimate) : "") << "\n";
     std::cout << o.pipeline << " " << sweep.key << "=" << v << ": frame " << median
               << " ms (median of " << o.frames << "), relative RMSE " << err << " (reference noise "
               << ref.noise << ")" << std::endl;
