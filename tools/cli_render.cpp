@@ -5,6 +5,7 @@
 
 #include "core/errors.hpp"
 #include "pipelines/budget/planner.hpp"
+#include "pipelines/cost.hpp"
 #include "pipelines/pipeline.hpp"
 #include "tools/cache_option.hpp"
 #include "tools/commands.hpp"
@@ -80,6 +81,8 @@ int run_render(const RenderOptions& o) {
     request.terms =
         std::find(ok.begin(), ok.end(), Terms::All) != ok.end() ? Terms::All : ok.front();
   }
+  // What it was expected to cost (pipelines/cost.hpp), beside what it took.
+  const CostEstimate expected = estimate_cost(o.pipeline, scene, request);
   RenderResult result = pipeline->render(scene, request);
   write_image(result.image, o.out, ToneMap{o.exposure});
   std::string std_error_file;
@@ -100,6 +103,12 @@ int run_render(const RenderOptions& o) {
                         {"plan", result.plan},
                         {"timings_ms", timings},
                         {"total_ms", total},
+                        {"estimate",
+                         {{"seconds", expected.seconds},
+                          {"host_bytes", expected.host_bytes},
+                          {"device_bytes", expected.device_bytes},
+                          {"time_field", expected.time_field},
+                          {"summary", expected.summary}}},
                         {"output", o.out},
                         {"width", result.image.width},
                         {"height", result.image.height}};
@@ -134,7 +143,8 @@ Handler add_render_command(CLI::App& app) {
                   "The error accepted, a relative RMSE against the reference (auto plans by it; "
                   "the reference samples until it is met), e.g. 0.05");
   add_cache_options(cmd, o->cache);
-  cmd->add_flag("--json", o->json, "Print the plan and per-stage milliseconds as one JSON object");
+  cmd->add_flag("--json", o->json,
+                "Print the plan, per-stage milliseconds and the cost estimate as one JSON object");
   return [o] { return run_render(*o); };
 }
 

@@ -73,13 +73,21 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
     // a forward one fewer), max_depth at most; 1 for the single term. The long stress mode's
     // mixed/70 (albedo 1 - 1e-6, tau 78, g -0.99, 16 lights) took 5.5x the estimate with
     // tau^2 / 2; the planner then sent it to the path tracer for 171 s.
+    // A dielectric reflects back in what reaches its boundary from inside: diffuse light with
+    // the internal diffuse Fresnel reflectance F_dr (Egan and Hilgeman's fit, 0.45 at ior 1.3,
+    // 0.65 at 1.6), so a walk takes 1 / (1 - F_dr) tries to leave, the escape-limited events that
+    // many times.
     MediumBounds m = medium_bounds(scene);
     double tau = m.mean_sigma_t * g.longest / 2;
+    const double eta = scene.medium.ior;
+    const double f_dr =
+        eta > 1 ? std::clamp(-1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta, 0.0, 0.95)
+                : 0.0;
     double events =
         request.terms == Terms::Single
             ? 1.0
             : std::min({double(s.max_depth), m.albedo < 1 ? m.albedo / (1 - m.albedo) : 1e9,
-                        tau + tau * tau * (1 - scene.medium.g) / 2});
+                        (tau + tau * tau * (1 - scene.medium.g) / 2) / (1 - f_dr)});
     // Measured: sphere 258^3 6.7 us a path against 1.73 at 66^3 (3.9x).
     double bricks = 1 + scene.voxels / 32.0;
     // Opaque blockers give their bricks a huge majorant: null collisions.
@@ -100,8 +108,15 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
     const bool varies = scene.medium.density && !scene.medium.density->homogeneous();
     const double dense = varies ? std::clamp(m.mean_sigma_t * g.voxel, 0.0, 1.0) : 0;
     const double walk = 1 + 1.6 * dense, per_light = 0.6 + 0.4 * dense;
-    double units =
-        covered * s.spp * (1 + events) * (1 + per_light * lights) * bricks * blocker * walk;
+    // A dielectric's boundary refracts and reflects: Fresnel at every crossing, the flights
+    // it reflects, and its shadow rays' exits, about doubling a vertex (the mesh bounds an
+    // index-matched medium too, by default, and that is in the constant). Measured (2026-12-07,
+    // bench/budget-survey.sh's dielectric scenes at 96^2 px, 32 voxels, 64 spp, the multiple
+    // term): 1.9-3.8x the estimate without F_dr's events and this factor, 0.60-1.13x with them,
+    // where the index-matched scenes took 0.64-0.82x.
+    const double boundary = eta != 1 ? 2 : 1;
+    double units = covered * s.spp * (1 + events) * (1 + per_light * lights) * bricks * blocker *
+                   walk * boundary;
     double seconds = units * 70e-9 + (px - covered) * s.spp * 0.2e-6;
     std::string what = std::to_string(int(covered)) + " covered px x " + std::to_string(s.spp) +
                        " spp x " + short_number(1 + events) + " vertices x " +

@@ -111,6 +111,28 @@ TEST(CostTest, NamesTheFieldThatDrivesEachCost) {
             "scene.image.width");
 }
 
+// The path tracer on a dielectric: its boundary about doubles a vertex, and the walks it reflects
+// back take more events to leave (1 / (1 - F_dr), the internal diffuse Fresnel reflectance:
+// 0.445 at ior 1.3, 0.651 at 1.6), so on a sphere at tau 1 and albedo 0.97 (walks that end by
+// escaping) the trace's seconds grow with the index. At albedo 0.5 the walks end by absorption:
+// their events stay, and ior 1.3 costs what 1.6 does.
+TEST(CostTest, ADielectricsBoundaryLengthensThePathTracersWalks) {
+  auto trace_seconds = [](double ior, double albedo) {
+    Scene s = sphere(32, 1, 64);
+    s.medium.ior = ior;
+    s.medium.sigma_s = Vec3{1, 1, 1} * albedo;
+    s.medium.sigma_a = Vec3{1, 1, 1} * (1 - albedo);
+    return estimate_cost("reference", s, request({{"spp", 4096}}, Terms::Multiple)).seconds -
+           estimate_cost("reference", s, request({{"spp", 4}}, Terms::Multiple)).seconds;
+  };
+  const double matched = trace_seconds(1, 0.97), at13 = trace_seconds(1.3, 0.97);
+  const double at16 = trace_seconds(1.6, 0.97);
+  EXPECT_GT(at13, 2 * matched);
+  EXPECT_GT(at16, 1.3 * at13);
+  EXPECT_GT(trace_seconds(1.3, 0.5), 1.4 * trace_seconds(1, 0.5));
+  EXPECT_DOUBLE_EQ(trace_seconds(1.3, 0.5), trace_seconds(1.6, 0.5));
+}
+
 TEST(CostTest, RejectsWhatRenderRejects) {
   Scene s = shipped("sphere");
   EXPECT_THROW(estimate_cost("nope", s, request({})), ValidationError);
