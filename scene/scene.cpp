@@ -1,5 +1,6 @@
 #include "scene/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -150,6 +151,16 @@ std::vector<Light> parse_lights(const nlohmann::json& lights, const std::string&
   for (size_t i = 0; i < lights.size(); ++i)
     out.push_back(parse_light(JsonObject(lights[i], path + "[" + std::to_string(i) + "]")));
   return out;
+}
+
+double spot_cone(const Light& l, const Vec3& d) {
+  if (l.type != Light::Type::Spot) return 1;
+  const double lo = std::cos(l.outer_deg * std::numbers::pi / 180);
+  const double hi = std::cos(l.inner_deg * std::numbers::pi / 180);
+  const double x = dot(d, normalize(l.direction));
+  if (hi <= lo) return x >= lo ? 1 : 0;
+  const double t = std::clamp((x - lo) / (hi - lo), 0.0, 1.0);
+  return t * t * (3 - 2 * t);
 }
 
 CameraFrame camera_frame(const Camera& c, int width, int height) {

@@ -33,6 +33,11 @@ struct Light {
   double outer_deg = 30;  // spot: zero outside this half-angle
 };
 
+// The share of the light's intensity that leaves it in the unit direction `d`: a spot's cone,
+// smooth (smoothstep of the cosine) from its outer half-angle to its inner one, as
+// kernels/common/lights.cl lights; 1 for the other lights.
+double spot_cone(const Light& l, const Vec3& d);
+
 struct Camera {
   Vec3 position{0, 0, 4};
   Vec3 target{0, 0, 0};

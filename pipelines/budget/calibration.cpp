@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <set>
 #include <stdexcept>
 
@@ -117,6 +118,8 @@ struct Cell {
   std::string note;
 };
 
+using ValueOf = std::function<std::optional<double>(const CalibrationEntry&)>;
+
 // The calibration grid's cell around `c`: per feature, the nearest calibrated values at or below
 // and at or above it. The worst of the points in that cell (the error need not be monotone in any
 // one feature, but is bounded by its corners better than by its nearest neighbour); with none
@@ -159,6 +162,119 @@ Cell worst_in_cell(std::vector<Point> points, const SceneClass& c) {
     cell.note = "from " + points[0].entry->scene + (k > 1 ? " and " + points[1].entry->scene : "");
   }
   return cell;
+}
+
+// How much the error grows, for a scene lit from further round than the calibration grid (its
+// facing under `front`), from the grid scenes to their twins lit from there (`value_of`: what an
+// entry of the scene's kind measured); 1 with no note where no twin says, `inside` false where the
+// scene lies past what the twins measured.
+struct Lighting {
+  double ratio = 1;
+  std::string note;
+  bool inside = true;
+};
+
+Lighting lighting_factor(const std::vector<CalibrationEntry>& entries, const SceneClass& c,
+                         double front, const ValueOf& value_of, bool noise, double outside_factor) {
+  constexpr double kFacingTolerance = CalibrationTable::kFacingTolerance;
+  auto is_front = [](const CalibrationEntry& e) { return e.twin.empty(); };
+  // Lit from further round than the grid: the front prediction times how much the error grew
+  // from a grid scene to its twin lit from there (the same class but the facing). Per facing
+  // the calibration lights from, the ratio at the scene's class is the worst in its cell of the
+  // twins' ratios (as the grid's errors are, worst_in_cell), its excess over 1 doubled where
+  // the scene's tau or g lies outside the twins' (the ratios grow with both: x1.0 at tau 1 to
+  // x4.8 at 16 for psf behind; with albedo they change by under a tenth); between those facings
+  // linear, from 1 at the front; never less than at a facing nearer the front.
+  struct Level {
+    double facing;
+    std::vector<Point> ratios;
+    Cell at;
+  };
+  std::vector<Level> levels;
+  bool kind_has_twins = false;
+  // Below a tenth of a percent an error's ratio says nothing (the marcher's 0 at both).
+  const double floor = noise ? 0.0 : 1e-3;
+  for (const CalibrationEntry& lit : entries) {
+    if (is_front(lit) || lit.cls.terms != c.terms || lit.cls.homogeneous != c.homogeneous ||
+        lit.cls.index_matched != c.index_matched)
+      continue;
+    kind_has_twins = true;
+    auto v = value_of(lit);
+    // A twin lit from the grid's side of the front is no twin (a hand-made table's).
+    if (!v || lit.cls.facing >= front - kFacingTolerance) continue;
+    for (const CalibrationEntry& twin : entries) {
+      // Its name first: the way's error is looked up for the one twin only.
+      if (twin.scene != lit.twin || twin.cls.terms != lit.cls.terms || !is_front(twin)) continue;
+      auto b = value_of(twin);
+      if (!b || *b + floor <= 0) continue;
+      const double ratio = std::max(1.0, (*v + floor) / (*b + floor));
+      auto level = std::find_if(levels.begin(), levels.end(), [&](const Level& l) {
+        return std::abs(l.facing - lit.cls.facing) < 0.1;
+      });
+      if (level == levels.end()) {
+        levels.push_back(Level{lit.cls.facing, {}, {}});
+        level = levels.end() - 1;
+      }
+      level->ratios.push_back({&lit, ratio});
+      break;
+    }
+  }
+  std::string note;
+  double ratio = 1;
+  bool inside = true;
+  if (!levels.empty()) {
+    std::sort(levels.begin(), levels.end(),
+              [](const Level& a, const Level& b) { return a.facing > b.facing; });
+    levels.insert(levels.begin(), Level{front, {}, Cell{1.0, "the front"}});
+    for (size_t i = 1; i < levels.size(); ++i) {
+      Level& l = levels[i];
+      l.at = worst_in_cell(l.ratios, c);
+      std::string past;
+      for (int f : {0, 2}) {
+        double lo_f = 1e300, hi_f = -1e300;
+        for (const Point& r : l.ratios) {
+          lo_f = std::min(lo_f, r.entry->cls.feature(f));
+          hi_f = std::max(hi_f, r.entry->cls.feature(f));
+        }
+        if (c.feature(f) < lo_f - 0.05 || c.feature(f) > hi_f + 0.05)
+          past += std::string(past.empty() ? "" : " and ") + SceneClass::feature_name(f);
+      }
+      if (!past.empty()) {
+        l.at.value = 1 + (l.at.value - 1) * outside_factor;
+        l.at.note += ", its excess doubled: " + past + " outside its twins'";
+      }
+      if (levels[i - 1].at.value > l.at.value) l.at = levels[i - 1].at;
+    }
+    const Level& last = levels.back();
+    ratio = last.at.value;
+    std::string from = last.at.note;
+    for (size_t i = 1; i < levels.size(); ++i)
+      if (c.facing >= levels[i].facing) {
+        const Level &a = levels[i - 1], &b = levels[i];
+        ratio =
+            b.at.value + (a.at.value - b.at.value) * (c.facing - b.facing) / (a.facing - b.facing);
+        from = b.at.note;
+        break;
+      }
+    note = "lit from facing " + short_number(c.facing) + ", the calibration's " +
+           short_number(front) + ": x" + short_number(ratio) +
+           " (its twins lit from further round: " + from + ")";
+    if (c.facing < last.facing - kFacingTolerance) {
+      ratio *= outside_factor;
+      inside = false;
+      note +=
+          ", further round than calibrated (x" + short_number(outside_factor) + ", conservative)";
+    }
+  } else if (kind_has_twins) {
+    // Twins of its kind were lit from further round, but none measured this: no evidence
+    // that it holds up there.
+    ratio = outside_factor;
+    inside = false;
+    note = "lit from facing " + short_number(c.facing) + ", the calibration's " +
+           short_number(front) + ": no twin lit from further round measured it (x" +
+           short_number(outside_factor) + ", conservative)";
+  }
+  return {ratio, note, inside};
 }
 
 }  // namespace
@@ -233,104 +349,11 @@ std::optional<CalibrationTable::Prediction> CalibrationTable::predict(const Scen
     p.note = outside + " (x" + short_number(factor) + ", conservative); " + p.note;
   }
   if (c.facing < front - kFacingTolerance) {
-    // Lit from further round than the grid: the front prediction times how much the error grew
-    // from a grid scene to its twin lit from there (the same class but the facing). Per facing
-    // the calibration lights from, the ratio at the scene's class is the worst in its cell of the
-    // twins' ratios (as the grid's errors are, worst_in_cell), its excess over 1 doubled where
-    // the scene's tau or g lies outside the twins' (the ratios grow with both: x1.0 at tau 1 to
-    // x4.8 at 16 for psf behind; with albedo they change by under a tenth); between those facings
-    // linear, from 1 at the front; never less than at a facing nearer the front.
-    struct Level {
-      double facing;
-      std::vector<Point> ratios;
-      Cell at;
-    };
-    std::vector<Level> levels;
-    bool kind_has_twins = false;
-    // Below a tenth of a percent an error's ratio says nothing (the marcher's 0 at both).
-    const double floor = noise ? 0.0 : 1e-3;
-    for (const CalibrationEntry& lit : entries) {
-      if (is_front(lit) || lit.cls.terms != c.terms || lit.cls.homogeneous != c.homogeneous ||
-          lit.cls.index_matched != c.index_matched)
-        continue;
-      kind_has_twins = true;
-      auto v = value_of(lit);
-      // A twin lit from the grid's side of the front is no twin (a hand-made table's).
-      if (!v || lit.cls.facing >= front - kFacingTolerance) continue;
-      for (const CalibrationEntry& twin : entries) {
-        // Its name first: the way's error is looked up for the one twin only.
-        if (twin.scene != lit.twin || twin.cls.terms != lit.cls.terms || !is_front(twin)) continue;
-        auto b = value_of(twin);
-        if (!b || *b + floor <= 0) continue;
-        const double ratio = std::max(1.0, (*v + floor) / (*b + floor));
-        auto level = std::find_if(levels.begin(), levels.end(), [&](const Level& l) {
-          return std::abs(l.facing - lit.cls.facing) < 0.1;
-        });
-        if (level == levels.end()) {
-          levels.push_back(Level{lit.cls.facing, {}, {}});
-          level = levels.end() - 1;
-        }
-        level->ratios.push_back({&lit, ratio});
-        break;
-      }
-    }
-    std::string note;
-    double ratio = 1;
-    if (!levels.empty()) {
-      std::sort(levels.begin(), levels.end(),
-                [](const Level& a, const Level& b) { return a.facing > b.facing; });
-      levels.insert(levels.begin(), Level{front, {}, Cell{1.0, "the front"}});
-      for (size_t i = 1; i < levels.size(); ++i) {
-        Level& l = levels[i];
-        l.at = worst_in_cell(l.ratios, c);
-        std::string past;
-        for (int f : {0, 2}) {
-          double lo_f = 1e300, hi_f = -1e300;
-          for (const Point& r : l.ratios) {
-            lo_f = std::min(lo_f, r.entry->cls.feature(f));
-            hi_f = std::max(hi_f, r.entry->cls.feature(f));
-          }
-          if (c.feature(f) < lo_f - 0.05 || c.feature(f) > hi_f + 0.05)
-            past += std::string(past.empty() ? "" : " and ") + SceneClass::feature_name(f);
-        }
-        if (!past.empty()) {
-          l.at.value = 1 + (l.at.value - 1) * outside_factor;
-          l.at.note += ", its excess doubled: " + past + " outside its twins'";
-        }
-        if (levels[i - 1].at.value > l.at.value) l.at = levels[i - 1].at;
-      }
-      const Level& last = levels.back();
-      ratio = last.at.value;
-      std::string from = last.at.note;
-      for (size_t i = 1; i < levels.size(); ++i)
-        if (c.facing >= levels[i].facing) {
-          const Level &a = levels[i - 1], &b = levels[i];
-          ratio = b.at.value +
-                  (a.at.value - b.at.value) * (c.facing - b.facing) / (a.facing - b.facing);
-          from = b.at.note;
-          break;
-        }
-      note = "lit from facing " + short_number(c.facing) + ", the calibration's " +
-             short_number(front) + ": x" + short_number(ratio) +
-             " (its twins lit from further round: " + from + ")";
-      if (c.facing < last.facing - kFacingTolerance) {
-        ratio *= outside_factor;
-        p.inside = false;
-        note +=
-            ", further round than calibrated (x" + short_number(outside_factor) + ", conservative)";
-      }
-    } else if (kind_has_twins) {
-      // Twins of its kind were lit from further round, but none measured this: no evidence
-      // that it holds up there.
-      ratio = outside_factor;
-      p.inside = false;
-      note = "lit from facing " + short_number(c.facing) + ", the calibration's " +
-             short_number(front) + ": no twin lit from further round measured it (x" +
-             short_number(outside_factor) + ", conservative)";
-    }
-    if (!note.empty()) {
-      p.value *= ratio;
-      p.note = note + "; " + p.note;
+    Lighting lit = lighting_factor(entries, c, front, value_of, noise, outside_factor);
+    p.inside = p.inside && lit.inside;
+    if (!lit.note.empty()) {
+      p.value *= lit.ratio;
+      p.note = lit.note + "; " + p.note;
     }
   }
   return p;

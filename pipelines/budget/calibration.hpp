@@ -85,12 +85,12 @@ class CalibrationTable {
   std::optional<Prediction> predict_noise(const SceneClass& c) const;
   // The ways calibrated for `terms`, in a stable order.
   std::vector<std::string> ways(Terms terms) const;
+  // A scene's facing this close to the grid's counts as lit the same way.
+  static constexpr double kFacingTolerance = 0.05;
 
  private:
   std::optional<Prediction> predict(const SceneClass& c, const std::string& what, bool noise,
                                     double outside_factor) const;
-  // A scene's facing this close to the grid's counts as lit the same way.
-  static constexpr double kFacingTolerance = 0.05;
 };
 
 // sqrt(4 pi * integral of p^2) of the Henyey-Greenstein phase function at g: how much the path

@@ -74,14 +74,7 @@ SceneClass classify(const Scene& scene, Terms terms) {
       c.light_inside = true;
       continue;
     }
-    double w = power / dot(to, to);
-    if (l.type == Light::Type::Spot) {
-      // Its cone toward the centre (smooth between the outer and inner angle, as it lights).
-      const double lo = std::cos(l.outer_deg * M_PI / 180), hi = std::cos(l.inner_deg * M_PI / 180);
-      const double t = std::clamp(
-          (dot(normalize(-to), normalize(l.direction)) - lo) / std::max(hi - lo, 1e-9), 0.0, 1.0);
-      w *= t * t * (3 - 2 * t);
-    }
+    const double w = power / dot(to, to) * spot_cone(l, normalize(-to));  // a spot: its cone
     weight += w;
     facing += w * dot(normalize(to), view);
   }

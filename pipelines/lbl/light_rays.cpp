@@ -45,12 +45,6 @@ void push(RaySet& set, const Vec3& o, const Vec3& d, const Vec3& power) {
   for (int c = 0; c < 3; ++c) set.rays.push_back(0.f);
 }
 
-double smooth_step(double e0, double e1, double x) {
-  if (e1 <= e0) return x >= e0 ? 1 : 0;
-  double t = std::clamp((x - e0) / (e1 - e0), 0.0, 1.0);
-  return t * t * (3 - 2 * t);
-}
-
 }  // namespace
 
 RaySet light_rays(const std::vector<Light>& lights, const Volume& v, double per_voxel,
@@ -82,17 +76,13 @@ RaySet light_rays(const std::vector<Light>& lights, const Volume& v, double per_
     basis(axis, u, w);
     double cos_max = dist > radius ? std::sqrt(1 - (radius / dist) * (radius / dist)) : -1.0;
     double solid_angle = 2 * kPi * (1 - cos_max) / (double(side) * side);
-    double cos_outer = std::cos(l.outer_deg * kPi / 180),
-           cos_inner = std::cos(l.inner_deg * kPi / 180);
     for (int j = 0; j < side; ++j)
       for (int i = 0; i < side; ++i) {
         double r, phi;
         concentric(2 * (i + 0.5) / side - 1, 2 * (j + 0.5) / side - 1, r, phi);
         double ct = 1 - r * r * (1 - cos_max), st = std::sqrt(std::max(0.0, 1 - ct * ct));
         Vec3 d = normalize(axis * ct + u * (st * std::cos(phi)) + w * (st * std::sin(phi)));
-        double cone = l.type == Light::Type::Spot
-                          ? smooth_step(cos_outer, cos_inner, dot(d, normalize(l.direction)))
-                          : 1.0;
+        double cone = spot_cone(l, d);
         if (cone <= 0) continue;
         push(set, l.position, d, power * (solid_angle * cone));
       }
