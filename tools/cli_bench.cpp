@@ -187,7 +187,8 @@ int run_bench(BenchOptions o) {
         << std::filesystem::path(o.scene).stem().string() << "," << o.terms << "," << scene.width
         << "," << scene.height << "," << sweep.key << "," << v << "," << bake_ms << "," << median
         << "," << o.frames << "," << err << "," << ref.noise << "," << stage_ms << ","
-        << (last.error_estimate ? std::to_string(*last.error_estimate) : "") << "\n";
+        << (last.error_estimate ? (std::ostringstream() << *last.error_estimate).str() : "")
+        << "\n";
     std::cout << o.pipeline << " " << sweep.key << "=" << v << ": frame " << median
               << " ms (median of " << o.frames << "), relative RMSE " << err << " (reference noise "
               << ref.noise << ")" << std::endl;

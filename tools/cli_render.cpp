@@ -81,8 +81,6 @@ int run_render(const RenderOptions& o) {
     request.terms =
         std::find(ok.begin(), ok.end(), Terms::All) != ok.end() ? Terms::All : ok.front();
   }
-  // What it was expected to cost (pipelines/cost.hpp), beside what it took.
-  const CostEstimate expected = estimate_cost(o.pipeline, scene, request);
   RenderResult result = pipeline->render(scene, request);
   write_image(result.image, o.out, ToneMap{o.exposure});
   std::string std_error_file;
@@ -92,6 +90,10 @@ int run_render(const RenderOptions& o) {
   }
 
   if (o.json) {
+    // What it was expected to cost (pipelines/cost.hpp), beside what it took: auto's estimate is
+    // of the way it picks without the cache's bakes, and a budget's path tracer at its expected
+    // samples.
+    const CostEstimate expected = estimate_cost(o.pipeline, scene, request);
     nlohmann::json timings = nlohmann::json::object();
     double total = 0;
     for (const auto& t : result.timings) {

@@ -112,8 +112,8 @@ CostEstimate ReferencePipeline::estimate(const Scene& scene, const RenderRequest
     // it reflects, and its shadow rays' exits, about doubling a vertex (the mesh bounds an
     // index-matched medium too, by default, and that is in the constant). Measured (2026-12-07,
     // bench/budget-survey.sh's dielectric scenes at 96^2 px, 32 voxels, 64 spp, the multiple
-    // term): 1.9-3.8x the estimate without F_dr's events and this factor, 0.60-1.13x with them,
-    // where the index-matched scenes took 0.64-0.82x.
+    // term): 1.9-4.0x the estimate without F_dr's events and this factor, 0.61-1.23x with them,
+    // where the index-matched scenes took 0.53-0.82x.
     const double boundary = eta != 1 ? 2 : 1;
     double units = covered * s.spp * (1 + events) * (1 + per_light * lights) * bricks * blocker *
                    walk * boundary;

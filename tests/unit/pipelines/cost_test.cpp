@@ -6,6 +6,7 @@
 #include <malloc.h>
 
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <string>
@@ -131,6 +132,11 @@ TEST(CostTest, ADielectricsBoundaryLengthensThePathTracersWalks) {
   EXPECT_GT(at16, 1.3 * at13);
   EXPECT_GT(trace_seconds(1.3, 0.5), 1.4 * trace_seconds(1, 0.5));
   EXPECT_DOUBLE_EQ(trace_seconds(1.3, 0.5), trace_seconds(1.6, 0.5));
+  // At the scene's largest index (4) the fit passes F_dr 1; it is held at 0.95 (20x the events).
+  const double at4 = trace_seconds(4, 0.97);
+  EXPECT_TRUE(std::isfinite(at4));
+  EXPECT_GT(at4, at16);
+  EXPECT_LT(at4, 20 * at16);
 }
 
 TEST(CostTest, RejectsWhatRenderRejects) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "../../test_util.hpp"
 #include "pipelines/accumulate.hpp"
@@ -85,6 +86,40 @@ TEST(ErrorScatter, IsTheRelativeSpreadOfTheSquaredErrorOfIndependentNormalPixels
   one.rgb[0] = 2;  // and pixel 0's red: 4
   EXPECT_NEAR(error_scatter(one), std::sqrt(2.0 * (12 * 12 + 4 * 4)) / (12 + 4), 1e-6);
   EXPECT_EQ(error_scatter(Image(4, 4)), 0);
+}
+
+// ... and it is that spread, drawn: 4000 images of normal errors on 40 pixels whose standard
+// errors range over 10x, each pixel's three channels one error (as a grey medium's), give the
+// relative spread of their squared error within 5 % (its own sampling error about 1.5 %); with
+// the channels' errors independent the spread is less (sqrt(1/3) of it for equal channels),
+// which error_scatter overstates.
+TEST(ErrorScatter, IsTheSpreadOfDrawnNormalErrors) {
+  Image sigma(8, 5);
+  for (size_t p = 0; p < 40; ++p)
+    for (int c = 0; c < 3; ++c) sigma.rgb[3 * p + c] = float(0.1 + 0.9 * (p % 10) / 9.0);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> z;
+  auto spread = [&](bool one_error) {
+    std::vector<double> squares;
+    for (int draw = 0; draw < 4000; ++draw) {
+      double sq = 0;
+      for (size_t p = 0; p < 40; ++p) {
+        const double shared = z(rng);
+        for (int c = 0; c < 3; ++c) {
+          const double e = sigma.rgb[3 * p + c] * (one_error ? shared : z(rng));
+          sq += e * e;
+        }
+      }
+      squares.push_back(sq);
+    }
+    double mean = 0, var = 0;
+    for (double q : squares) mean += q / squares.size();
+    for (double q : squares) var += (q - mean) * (q - mean) / (squares.size() - 1);
+    return std::sqrt(var) / mean;
+  };
+  const double predicted = error_scatter(sigma);
+  EXPECT_NEAR(spread(true), predicted, 0.05 * predicted);
+  EXPECT_NEAR(spread(false), predicted / std::sqrt(3.0), 0.05 * predicted);
 }
 
 // ... and it predicts how far the squared error one render reaches scatters over seeds: the

@@ -71,8 +71,8 @@ TEST(ReferencePipeline, ABudgetTakesTheSamplesItsStandardErrorSaysItNeeds) {
   RenderResult r = p.render(s, {Terms::Multiple, {{"spp", 12}, {"seed", 3}}, {}, budget});
   const std::string reason = plan_stage(r.plan, "trace").reason;
   ASSERT_TRUE(r.error_estimate);
-  // Met with the scatter of one image's error taken two deviations up: more samples than the
-  // standard error alone would have stopped at.
+  // Met with the scatter of one image's error taken two deviations up (its standard error is
+  // under the aim by more than the scatter's factor).
   const double scatter = error_scatter(*r.std_error);
   EXPECT_GT(scatter, 0.05) << reason;
   EXPECT_LE(*r.error_estimate * std::sqrt(1 + 2 * scatter), RenderRequest::kBudgetMargin * budget)
