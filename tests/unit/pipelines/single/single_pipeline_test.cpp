@@ -181,13 +181,7 @@ TEST_F(SinglePipelineTest, ShadePassMatchesCpu) {
         } else {
           Vec3 to = l.position - x;
           wl = normalize(to);
-          e /= dot(to, to);
-          if (l.type == Light::Type::Spot) {
-            double co = std::cos(l.outer_deg * std::numbers::pi / 180),
-                   ci = std::cos(l.inner_deg * std::numbers::pi / 180);
-            double t = std::clamp((dot(wl * -1.0, l.direction) - co) / (ci - co), 0.0, 1.0);
-            e *= t * t * (3 - 2 * t);
-          }
+          e *= spot_cone(l, wl * -1.0) / dot(to, to);  // a spot: its cone
         }
         in += e * psi(i, c, wl) * hg(dot(wl, to_eye * -1.0));
       }
